@@ -1,0 +1,206 @@
+"""The `lumos` command: parse arguments, call the Python API, print. No rendering logic lives here.
+
+    lumos render SCENE [-o OUT] [--method M] [--width W] ... [--stats FILE.json] [--quiet]
+    lumos info SCENE
+    lumos compare A B [--diff D.png]
+
+Exit codes: 0 success; 2 bad input or usage (one line `lumos: error: <message>` on stderr); 1 internal error
+(rerun with LUMOS_DEBUG=1 for the traceback); 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+from . import __version__
+from .errors import LumosError
+
+#: render flags that override the scene's `render:` block (argparse dest == setting name).
+SETTING_FLAGS = ("method", "shading", "width", "height", "spp", "max_depth", "seed", "threads", "exposure", "aov")
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Run the command line `argv` (default: sys.argv[1:]) and return the exit code."""
+    started = time.perf_counter()
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, usage errors (argparse prints them)
+        return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
+    try:
+        return args.run(args, started) or 0
+    except LumosError as exc:
+        print(f"lumos: error: {_one_line(str(exc))}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("lumos: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:
+        if os.environ.get("LUMOS_DEBUG"):
+            raise
+        print(f"lumos: internal error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
+        print("lumos: this is a bug in lumos; rerun with LUMOS_DEBUG=1 to see the traceback", file=sys.stderr)
+        return 1
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="lumos", description="Render scenes with classic rendering methods.")
+    parser.add_argument("--version", action="version", version=f"lumos {__version__}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    render = commands.add_parser("render", help="render a scene to an image", description="Render SCENE. "
+                                 "Flags override the scene's render: block.")
+    render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    render.add_argument("-o", "--output", metavar="OUT", help="image to write: .png, .exr, .pfm or .npy "
+                        "(default: <scene name>.png in the current folder)")
+    render.add_argument("--method", metavar="M", help="rendering method (e.g. raycast)")
+    render.add_argument("--shading", metavar="S", help="flat, gouraud or phong")
+    render.add_argument("--width", type=int, metavar="W", help="image width in pixels")
+    render.add_argument("--height", type=int, metavar="H", help="image height in pixels")
+    render.add_argument("--spp", type=int, metavar="N", help="samples per pixel")
+    render.add_argument("--max-depth", type=int, metavar="D", help="bounces of secondary rays (0 = none)")
+    render.add_argument("--seed", type=int, metavar="S", help="random seed")
+    render.add_argument("--threads", type=int, metavar="T", help="worker threads (default: all cores)")
+    render.add_argument("--exposure", type=float, metavar="E", help="exposure multiplier for PNG output")
+    render.add_argument("--aov", action="extend", nargs="+", metavar="NAME",
+                        help="also write these buffers beside OUT: depth, normal, albedo, object_id")
+    render.add_argument("--stats", metavar="FILE.json", help="write timings and ray counts as JSON")
+    render.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
+    render.set_defaults(run=run_render)
+
+    info = commands.add_parser("info", help="print what a scene holds")
+    info.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    info.set_defaults(run=run_info)
+
+    compare = commands.add_parser("compare", help="error figures between two images (B is the reference)")
+    compare.add_argument("a", metavar="A", help="image (.png, .exr, .pfm, .npy, .jpg)")
+    compare.add_argument("b", metavar="B", help="reference image")
+    compare.add_argument("--diff", metavar="D.png", help="write a heat map of the per-pixel error")
+    compare.set_defaults(run=run_compare)
+    return parser
+
+
+# ------------------------------------------------------------------------------------------------ commands
+
+
+def run_render(args: argparse.Namespace, started: float) -> int:
+    from . import api
+    from .io.images import check_output_path
+    from .scene.loader import load_scene
+
+    out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".png")
+    check_output_path(out)
+    if args.stats:
+        _check_stats_path(Path(args.stats))
+    t0 = time.perf_counter()
+    scene = load_scene(args.scene)
+    load_s = time.perf_counter() - t0
+    overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
+    api.resolve_settings(scene, overrides)  # bad flags fail here, before anything is compiled
+    img = api.render(scene, progress=not args.quiet, **overrides)
+    img.save(out)
+    stats = dict(img.stats, load_s=load_s, total_s=time.perf_counter() - started)
+    if args.stats:
+        _write_json(Path(args.stats), stats)
+    if not args.quiet:
+        print(f"lumos: {_summary(stats)} -> {out}", file=sys.stderr)
+    return 0
+
+
+def run_info(args: argparse.Namespace, started: float) -> int:
+    from . import api
+    from .scene.loader import load_scene
+
+    info = api.scene_info(load_scene(args.scene))
+    rows = [("scene", args.scene)] + [(key, _describe(key, value)) for key, value in info.items()]
+    width = max(len(key) for key, _ in rows)
+    for key, text in rows:
+        print(f"{key.replace('_', ' '):<{width}}  {text}")
+    return 0
+
+
+def run_compare(args: argparse.Namespace, started: float) -> int:
+    from . import metrics
+    from .io.images import check_output_path, read_image, write_image
+
+    if args.diff:
+        check_output_path(args.diff)
+    a, b = read_image(args.a), read_image(args.b)
+    figures = metrics.compare(a, b)
+    for key, value in figures.items():
+        unit = " dB" if key == "psnr" and math.isfinite(value) else ""
+        print(f"{key:<15} {value:.6g}{unit}")
+    if args.diff:
+        write_image(args.diff, metrics.diff_image(a, b), srgb=False)
+    return 0
+
+
+# ------------------------------------------------------------------------------------------------- helpers
+
+
+def _summary(stats: dict) -> str:
+    """`raycast 640x480, 1 spp, 0.84 s (render 0.61 s), 307,200 rays, 0.50 Mrays/s`."""
+    return (
+        f"{stats.get('method', '?')} {stats.get('width', '?')}x{stats.get('height', '?')}, "
+        f"{stats.get('spp', '?')} spp, {stats['total_s']:.2f} s (render {stats.get('render_s', 0.0):.2f} s), "
+        f"{int(stats.get('rays', 0)):,} rays, {stats.get('mrays_per_s', 0.0):.2f} Mrays/s"
+    )
+
+
+def _describe(key: str, value: Any) -> str:
+    """One readable line for a `scene_info` entry."""
+    if isinstance(value, dict) and key in ("objects", "lights"):
+        total = sum(value.values())
+        parts = ", ".join(f"{kind} {count}" for kind, count in value.items())
+        return f"{total} ({parts})" if parts else "0"
+    if isinstance(value, dict):
+        return ", ".join(f"{k}={_num(v)}" for k, v in value.items())
+    if key == "bounds" and isinstance(value, (list, tuple)) and len(value) == 2:
+        lo, hi = value
+        return f"({', '.join(map(_num, lo))}) .. ({', '.join(map(_num, hi))})"
+    return _num(value)
+
+
+def _num(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if isinstance(value, int) and not isinstance(value, bool):
+        return f"{value:,}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(map(_num, value)) + "]"
+    return str(value)
+
+
+def _check_stats_path(path: Path) -> None:
+    if path.is_dir():
+        raise LumosError(f"cannot write stats '{path}': it is a directory")
+    folder = path.parent
+    if not folder.is_dir():
+        raise LumosError(f"cannot write stats '{path}': folder '{folder}' does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise LumosError(f"cannot write stats '{path}': permission denied (folder '{folder}' is not writable)")
+
+
+def _write_json(path: Path, data: dict) -> None:
+    """Write `data` as JSON atomically: a temporary file beside `path`, then os.replace."""
+    text = json.dumps(data, indent=2, default=str) + "\n"
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())

@@ -1,0 +1,241 @@
+"""Scene model → `SceneArrays`: flatten once, build the BVH, hand the kernels nothing but arrays.
+
+    compiled = compile_scene(scene)
+    compiled.arrays        # kernels.layout.SceneArrays
+    compiled.bvh_build_s   # seconds spent in the BVH builder
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import config
+from ..kernels import layout as L
+from .bvh import build
+from .shapes import canonical, rect_canonical, world_bounds
+
+
+@dataclass
+class CompiledScene:
+    arrays: L.SceneArrays
+    bvh_build_s: float
+    bvh_depth: int
+    n_triangles: int
+    n_shapes: int
+    bounds: np.ndarray  # (2, 3): min and max of everything bounded (planes excluded)
+    object_names: list = field(default_factory=list)
+
+
+class _Materials:
+    """Material rows, deduplicated by identity (a named material used by ten objects is one row)."""
+
+    def __init__(self):
+        self.rows: list[np.ndarray] = []
+        self.index: dict[int, int] = {}
+
+    def add(self, material) -> int:
+        key = id(material)
+        if key not in self.index:
+            row = np.zeros(L.MAT_SIZE)
+            row[L.MAT_KA : L.MAT_KA + 3] = material.ka
+            row[L.MAT_KD : L.MAT_KD + 3] = material.kd
+            row[L.MAT_KS : L.MAT_KS + 3] = material.ks
+            row[L.MAT_SHININESS] = material.shininess
+            row[L.MAT_KR : L.MAT_KR + 3] = material.kr
+            row[L.MAT_KT : L.MAT_KT + 3] = material.kt
+            row[L.MAT_IOR] = material.ior
+            row[L.MAT_EMISSION : L.MAT_EMISSION + 3] = material.emission
+            self.index[key] = len(self.rows)
+            self.rows.append(row)
+        return self.index[key]
+
+    def emitter(self, radiance) -> int:
+        row = np.zeros(L.MAT_SIZE)
+        row[L.MAT_SHININESS] = 1.0
+        row[L.MAT_IOR] = 1.0
+        row[L.MAT_EMISSION : L.MAT_EMISSION + 3] = radiance
+        self.rows.append(row)
+        return len(self.rows) - 1
+
+    def array(self) -> np.ndarray:
+        return np.array(self.rows, dtype=np.float64).reshape(-1, L.MAT_SIZE)
+
+
+class _Shapes:
+    def __init__(self):
+        self.xforms, self.infos, self.bounds = [], [], []
+
+    def add(self, kind, world_from_canonical, material, object_id, flags=0, light=-1):
+        self.xforms.append(np.linalg.inv(world_from_canonical)[:3, :4])
+        self.infos.append((kind, material, object_id, flags, light))
+        self.bounds.append(None if kind == L.SHAPE_PLANE else world_bounds(kind, world_from_canonical))
+
+
+def _mesh_triangles(obj, world_from_object):
+    """World-space triangle vertices (m, 9), normals (m, 9) and uvs (m, 6) of a triangle or mesh object."""
+    if obj.type == "triangle":
+        verts, faces, normals, uvs = np.array(obj.vertices, dtype=np.float64), np.array([[0, 1, 2]]), None, None
+    else:
+        verts, faces, normals, uvs = obj.vertices, obj.faces, obj.normals, obj.uvs
+    if world_from_object is not None:
+        verts = verts @ world_from_object[:3, :3].T + world_from_object[:3, 3]
+        if normals is not None:
+            normals = normals @ np.linalg.inv(world_from_object[:3, :3])  # inverse transpose, row vectors
+    tri_v = verts[faces].reshape(-1, 9)
+    tri_n = None
+    if normals is not None:
+        n = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
+        tri_n = n[faces].reshape(-1, 9)
+    tri_uv = None if uvs is None else uvs[faces].reshape(-1, 6)
+    return tri_v, tri_n, tri_uv
+
+
+def _lights(scene, materials: _Materials, shapes: _Shapes, first_light_object: int):
+    n = len(scene.lights)
+    kind = np.zeros(n, np.int32)
+    samples = np.ones(n, np.int32)
+    vecs = np.zeros((n, 6, 3))
+    scalars = np.zeros((n, 5))
+    for i, light in enumerate(scene.lights):
+        if light.type in ("point", "directional"):
+            vecs[i, L.LV_DIFFUSE] = light.diffuse_intensity
+            vecs[i, L.LV_SPECULAR] = light.specular_intensity
+            scalars[i, : 3] = (1.0, 0.0, 0.0)
+            if light.type == "point":
+                kind[i] = L.LIGHT_POINT
+                vecs[i, L.LV_POSITION] = light.position
+                scalars[i, :3] = light.attenuation
+            else:
+                kind[i] = L.LIGHT_DIRECTIONAL
+                vecs[i, L.LV_DIRECTION] = np.divide(light.direction, np.linalg.norm(light.direction))
+            continue
+        vecs[i, L.LV_DIFFUSE] = light.radiance
+        vecs[i, L.LV_SPECULAR] = light.radiance
+        samples[i] = light.samples
+        mat = materials.emitter(light.radiance)
+        if light.shape == "rect":
+            kind[i] = L.LIGHT_RECT
+            m = rect_canonical(light.corner, light.edge_u, light.edge_v)
+            vecs[i, L.LV_POSITION] = light.corner
+            vecs[i, L.LV_DIRECTION] = m[:3, 2]
+            vecs[i, L.LV_EDGE_U] = light.edge_u
+            vecs[i, L.LV_EDGE_V] = light.edge_v
+            scalars[i, L.LS_AREA] = np.linalg.norm(np.cross(light.edge_u, light.edge_v))
+            shapes.add(L.SHAPE_RECT, m, mat, first_light_object + i, light=i)
+        elif light.shape == "disk":
+            kind[i] = L.LIGHT_DISK
+            from .shapes import frame
+
+            f = frame(light.normal)
+            vecs[i, L.LV_POSITION] = light.center
+            vecs[i, L.LV_DIRECTION] = f[:, 2]
+            vecs[i, L.LV_EDGE_U] = f[:, 0] * light.radius
+            vecs[i, L.LV_EDGE_V] = f[:, 1] * light.radius
+            scalars[i, L.LS_RADIUS] = light.radius
+            scalars[i, L.LS_AREA] = np.pi * light.radius**2
+            m = np.eye(4)
+            m[:3, :3] = np.column_stack([f[:, 0] * light.radius, f[:, 1] * light.radius, f[:, 2]])
+            m[:3, 3] = light.center
+            shapes.add(L.SHAPE_DISK, m, mat, first_light_object + i, light=i)
+        else:
+            kind[i] = L.LIGHT_SPHERE
+            vecs[i, L.LV_POSITION] = light.center
+            scalars[i, L.LS_RADIUS] = light.radius
+            scalars[i, L.LS_AREA] = 4.0 * np.pi * light.radius**2
+            m = np.eye(4)
+            m[:3, :3] *= light.radius
+            m[:3, 3] = light.center
+            shapes.add(L.SHAPE_SPHERE, m, mat, first_light_object + i, light=i)
+    return kind, samples, vecs, scalars
+
+
+def compile_scene(scene) -> CompiledScene:
+    """Flatten a validated `Scene` into `SceneArrays` and build its BVH."""
+    materials = _Materials()
+    shapes = _Shapes()
+    tri_parts = []  # (verts, normals, uvs, material, object)
+    names = []
+    for object_id, obj in enumerate(scene.objects):
+        names.append(obj.name or f"{obj.type}#{object_id}")
+        mat = materials.add(scene.material_of(obj))
+        world_from_object = None if obj.transform is None else obj.transform.to_matrix()
+        if obj.type in ("triangle", "mesh"):
+            tri_parts.append((*_mesh_triangles(obj, world_from_object), mat, object_id))
+            continue
+        kind, object_from_canonical = canonical(obj)
+        m = object_from_canonical if world_from_object is None else world_from_object @ object_from_canonical
+        flags = L.FLAG_CAPPED if getattr(obj, "capped", False) else 0
+        shapes.add(kind, m, mat, object_id, flags)
+    light_kind, light_samples, light_vecs, light_scalars = _lights(scene, materials, shapes, len(scene.objects))
+
+    tri_verts, tri_normals, tri_uvs, tri_info = _concat_triangles(tri_parts)
+    n_tri, n_shape = len(tri_verts), len(shapes.infos)
+    shape_info = np.array(shapes.infos, dtype=np.int32).reshape(-1, 5)
+    shape_xform = np.array(shapes.xforms, dtype=np.float64).reshape(-1, 3, 4)
+    bounded = [s for s in range(n_shape) if shapes.bounds[s] is not None]
+    unbounded = np.array([s for s in range(n_shape) if shapes.bounds[s] is None], dtype=np.int32)
+
+    # one BVH over triangles and bounded shapes
+    prim_bounds = np.empty((n_tri + len(bounded), 6))
+    if n_tri:
+        v = tri_verts.reshape(-1, 3, 3).astype(np.float64)
+        prim_bounds[:n_tri, :3] = v.min(axis=1)
+        prim_bounds[:n_tri, 3:] = v.max(axis=1)
+    for k, s in enumerate(bounded):
+        prim_bounds[n_tri + k] = shapes.bounds[s]
+    t0 = time.perf_counter()
+    node_box, node_link, order, depth = build(prim_bounds)
+    build_s = time.perf_counter() - t0
+
+    # leaf order: triangles are permuted so that leaves read them contiguously
+    is_tri = order < n_tri
+    tri_order = order[is_tri]
+    prim_ref = np.empty(len(order), np.int32)
+    prim_ref[is_tri] = np.arange(len(tri_order), dtype=np.int32)
+    shape_ids = np.array(bounded, dtype=np.int64)[order[~is_tri] - n_tri] if len(bounded) else np.zeros(0, np.int64)
+    prim_ref[~is_tri] = ~shape_ids.astype(np.int32)
+
+    arrays = L.SceneArrays(
+        tri_verts=np.ascontiguousarray(tri_verts[tri_order]),
+        tri_normals=np.ascontiguousarray(tri_normals[tri_order]),
+        tri_uvs=np.ascontiguousarray(tri_uvs[tri_order]),
+        tri_info=np.ascontiguousarray(tri_info[tri_order]),
+        shape_xform=shape_xform,
+        shape_info=shape_info,
+        prim_ref=prim_ref,
+        node_box=node_box,
+        node_link=node_link,
+        unbounded=unbounded,
+        materials=materials.array(),
+        light_kind=light_kind,
+        light_samples=light_samples,
+        light_vecs=light_vecs,
+        light_scalars=light_scalars,
+        ambient=np.array(scene.ambient, dtype=np.float64),
+        background=np.array(scene.background, dtype=np.float64),
+    )
+    if len(prim_bounds):
+        bounds = np.array([prim_bounds[:, :3].min(axis=0), prim_bounds[:, 3:].max(axis=0)])
+    else:
+        bounds = np.zeros((2, 3))
+    return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names)
+
+
+def _concat_triangles(parts):
+    if not parts:
+        return (np.zeros((0, 9), np.float32), np.zeros((0, 9), np.float32), np.zeros((0, 6), np.float32),
+                np.zeros((0, 5), np.int32))
+    verts, normals, uvs, infos = [], [], [], []
+    for v, n, uv, mat, obj in parts:
+        m = len(v)
+        verts.append(v.astype(np.float32))
+        normals.append(np.zeros((m, 9), np.float32) if n is None else n.astype(np.float32))
+        uvs.append(np.zeros((m, 6), np.float32) if uv is None else uv.astype(np.float32))
+        flags = (L.FLAG_NORMALS if n is not None else 0) | (L.FLAG_UVS if uv is not None else 0)
+        info = np.empty((m, 5), np.int32)
+        info[:] = (0, mat, obj, flags, -1)
+        infos.append(info)
+    return np.concatenate(verts), np.concatenate(normals), np.concatenate(uvs), np.concatenate(infos)

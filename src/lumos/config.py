@@ -1,0 +1,15 @@
+"""Numeric constants shared by the compile step and the kernels (one place for every epsilon)."""
+
+#: Offset, relative to the scale of the hit point, used when spawning secondary rays off a surface.
+RAY_EPSILON = 1e-4
+#: A distance larger than any in a scene: "no hit yet". Finite on purpose (fastmath may fold np.inf away).
+T_FAR = 1e30
+#: BVH: primitives per leaf at most, and SAH bins.
+BVH_MAX_LEAF = 4
+BVH_BINS = 16
+#: BVH traversal stack depth (the builder guarantees the tree is not deeper).
+BVH_STACK = 64
+#: Largest image the film will allocate (pixels), and the default render size.
+MAX_PIXELS = 16384 * 16384
+DEFAULT_WIDTH = 640
+DEFAULT_HEIGHT = 480

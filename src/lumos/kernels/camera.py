@@ -1,0 +1,49 @@
+"""Primary rays (DESIGN.md §3): pixel (x, y) sampled at (x + jx, y + jy), row 0 at the top.
+
+    sx = 2(x + jx)/W − 1,  sy = 1 − 2(y + jy)/H,  a = W/H
+    perspective:   o = position,  d = normalize(sx·a·t·u + sy·t·v − w),  t = tan(fov/2)
+    orthographic:  o = position + sx·a·(size/2)·u + sy·(size/2)·v,  d = −w
+    thin lens:     o = position + aperture·(lx·u + ly·v), aimed at the pinhole ray's point at focus_distance
+
+With one sample per pixel the pixel centre is used (jx = jy = 0.5); otherwise `spp` stratified jittered points.
+Random dimensions 0–1 place the sample in the pixel, 2–3 on the lens.
+"""
+
+import math
+
+from .jit import njit
+from .layout import CAM_APERTURE, CAM_FOCUS, CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
+from .rng import rand01
+from .sampling import concentric_disk, stratified_2d
+from .vec import madd, mul, normalize, row3, sub
+
+
+@njit
+def camera_ray(cam_vecs, cam_params, width, height, x, y, sample, spp, seed, pixel):
+    """Origin and unit direction of sample `sample` of pixel (x, y)."""
+    if spp == 1:
+        jx, jy = 0.5, 0.5
+    else:
+        jx, jy = stratified_2d(sample, spp, rand01(seed, pixel, sample, 0), rand01(seed, pixel, sample, 1))
+    sx = 2.0 * (x + jx) / width - 1.0
+    sy = 1.0 - 2.0 * (y + jy) / height
+    aspect = width / height
+    pos = row3(cam_vecs, 0)
+    u = row3(cam_vecs, 1)
+    v = row3(cam_vecs, 2)
+    w = row3(cam_vecs, 3)
+    if cam_params[CAM_ORTHO] != 0.0:
+        half = cam_params[CAM_HALF_SIZE]
+        o = madd(madd(pos, u, sx * aspect * half), v, sy * half)
+        return o, mul(w, -1.0)
+    t = cam_params[CAM_TAN_HALF_FOV]
+    d = normalize(madd(madd(mul(w, -1.0), u, sx * aspect * t), v, sy * t))
+    aperture = cam_params[CAM_APERTURE]
+    if aperture == 0.0:
+        return pos, d
+    # thin lens: every ray through the lens meets the pinhole ray on the plane of focus
+    cos_axis = -(d[0] * w[0] + d[1] * w[1] + d[2] * w[2])
+    focus = madd(pos, d, cam_params[CAM_FOCUS] / cos_axis)
+    lx, ly = concentric_disk(rand01(seed, pixel, sample, 2), rand01(seed, pixel, sample, 3))
+    o = madd(madd(pos, u, aperture * lx), v, aperture * ly)
+    return o, normalize(sub(focus, o))

@@ -1,0 +1,160 @@
+"""The classic illumination model — the one function every method calls.
+
+    I = Ka·Ia + Σ_lights [ Kd·Id·max(N·L, 0) + Ks·Is·max(R·V, 0)^n ] / att(d),   R = 2(N·L)N − L
+
+per RGB channel (the textbook's Phong model, eq. for "illumination = ambient + diffuse + specular"), with
+`att(d) = c + l·d + q·d²` for point lights and att = 1 for directional ones. A light contributes nothing where
+N·L <= 0. An area light of radiance Le is sampled at `samples` stratified points; each sample y acts as a point
+light of intensity Le·cosθ_y·A / (π·r²·N), so that its diffuse part is Kd·E/π with E the irradiance the light
+delivers (DESIGN.md §3). A sphere light is sampled uniformly in the cone it subtends (intensity Le·Ω/(π·N)).
+
+With `shadows` set, each light sample is tested with a shadow ray (any hit before the light); raycast passes
+False.
+"""
+
+import math
+
+from .. import config
+from .jit import njit
+from .layout import (
+    LIGHT_DIRECTIONAL,
+    LIGHT_DISK,
+    LIGHT_POINT,
+    LIGHT_RECT,
+    LS_AREA,
+    LS_ATT_C,
+    LS_ATT_L,
+    LS_ATT_Q,
+    LS_RADIUS,
+    LV_DIFFUSE,
+    LV_DIRECTION,
+    LV_EDGE_U,
+    LV_EDGE_V,
+    LV_POSITION,
+    LV_SPECULAR,
+    MAT_KA,
+    MAT_KD,
+    MAT_KS,
+    MAT_SHININESS,
+)
+from .rng import rand01
+from .sampling import concentric_disk, stratified_2d
+from .traverse import any_hit
+from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
+
+_INV_PI = 1.0 / math.pi
+#: Dimensions of the per-pixel random stream used by light sampling start here (camera/lens use 0..3).
+DIM_LIGHTS = 16
+
+
+@njit
+def sample_light(sa, j, p, u1, u2):
+    """One sample of light j seen from point p.
+
+    Returns (L, dist, w) with L the unit direction to the light, dist the distance to the sampled point (a large
+    number for directional lights) and w the factor that scales the light's Id and Is for this sample
+    (1/att for point lights, 1 for directional, the equivalent-intensity factor for area lights; 0 if the
+    sample cannot light p).
+    """
+    kind = sa.light_kind[j]
+    vecs = sa.light_vecs[j]
+    sc = sa.light_scalars[j]
+    if kind == LIGHT_DIRECTIONAL:
+        return mul(row3(vecs, LV_DIRECTION), -1.0), config.T_FAR, 1.0
+    if kind == LIGHT_POINT:
+        to = sub(row3(vecs, LV_POSITION), p)
+        dist = length(to)
+        if dist == 0.0:
+            return (0.0, 0.0, 1.0), 0.0, 0.0
+        att = sc[LS_ATT_C] + sc[LS_ATT_L] * dist + sc[LS_ATT_Q] * dist * dist
+        return mul(to, 1.0 / dist), dist, 1.0 / att
+    if kind == LIGHT_RECT or kind == LIGHT_DISK:
+        if kind == LIGHT_RECT:
+            a, b = u1, u2
+        else:
+            a, b = concentric_disk(u1, u2)
+        y = madd(madd(row3(vecs, LV_POSITION), row3(vecs, LV_EDGE_U), a), row3(vecs, LV_EDGE_V), b)
+        to = sub(y, p)
+        dist = length(to)
+        if dist == 0.0:
+            return (0.0, 0.0, 1.0), 0.0, 0.0
+        L = mul(to, 1.0 / dist)
+        cos_light = -dot(row3(vecs, LV_DIRECTION), L)  # one-sided: emits along its normal only
+        if cos_light <= 0.0:
+            return L, dist, 0.0
+        return L, dist, cos_light * sc[LS_AREA] * _INV_PI / (dist * dist)
+    # sphere light: uniform directions in the cone it subtends from p
+    to = sub(row3(vecs, LV_POSITION), p)
+    dc = length(to)
+    r = sc[LS_RADIUS]
+    if dc <= r:
+        return (0.0, 0.0, 1.0), 0.0, 0.0  # inside the light
+    axis = mul(to, 1.0 / dc)
+    sin2_max = (r * r) / (dc * dc)
+    cos_max = math.sqrt(max(0.0, 1.0 - sin2_max))
+    cos_t = 1.0 - u1 * (1.0 - cos_max)
+    sin_t = math.sqrt(max(0.0, 1.0 - cos_t * cos_t))
+    phi = 2.0 * math.pi * u2
+    t1, t2 = orthonormal_basis(axis)
+    L = normalize(madd(madd(mul(axis, cos_t), t1, sin_t * math.cos(phi)), t2, sin_t * math.sin(phi)))
+    # distance to the near surface of the sphere along L
+    b = dot(to, L)
+    disc = b * b - (dc * dc - r * r)
+    dist = b - math.sqrt(max(0.0, disc))
+    solid_angle = 2.0 * math.pi * (1.0 - cos_max)
+    return L, dist, solid_angle * _INV_PI
+
+
+@njit
+def phong(n, L, V, mat, Id, Is, w):
+    """One light's term of the classic model for unit N, L, V: (Kd·Id·(N·L) + Ks·Is·(R·V)^n)·w, per channel."""
+    n_dot_l = dot(n, L)
+    if n_dot_l <= 0.0 or w == 0.0:
+        return 0.0, 0.0, 0.0
+    R = madd(mul(L, -1.0), n, 2.0 * n_dot_l)
+    r_dot_v = dot(R, V)
+    spec = max(r_dot_v, 0.0) ** mat[MAT_SHININESS]
+    return (
+        (mat[MAT_KD] * Id[0] * n_dot_l + mat[MAT_KS] * Is[0] * spec) * w,
+        (mat[MAT_KD + 1] * Id[1] * n_dot_l + mat[MAT_KS + 1] * Is[1] * spec) * w,
+        (mat[MAT_KD + 2] * Id[2] * n_dot_l + mat[MAT_KS + 2] * Is[2] * spec) * w,
+    )
+
+
+@njit
+def illuminate(sa, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
+    """The classic model at point p with unit shading normal n (facing the viewer) and unit V towards the eye.
+
+    Returns ((r, g, b), shadow rays traced). Random numbers for area-light samples come from
+    (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on nothing else.
+    """
+    mat = sa.materials[mat_id]
+    amb = sa.ambient
+    r = mat[MAT_KA] * amb[0]
+    g = mat[MAT_KA + 1] * amb[1]
+    b = mat[MAT_KA + 2] * amb[2]
+    rays = 0
+    dim = DIM_LIGHTS
+    for j in range(sa.light_kind.shape[0]):
+        Id = row3(sa.light_vecs[j], LV_DIFFUSE)
+        Is = row3(sa.light_vecs[j], LV_SPECULAR)
+        n_samples = sa.light_samples[j]
+        inv_n = 1.0 / n_samples
+        for s in range(n_samples):
+            u1, u2 = 0.5, 0.5
+            if sa.light_kind[j] > LIGHT_DIRECTIONAL:
+                u1, u2 = stratified_2d(s, n_samples, rand01(seed, pixel, sample, dim), rand01(seed, pixel, sample, dim + 1))
+                dim += 2
+            L, dist, w = sample_light(sa, j, p, u1, u2)
+            if w == 0.0 or dot(n, L) <= 0.0:
+                continue
+            if shadows:
+                rays += 1
+                origin = madd(p, n, config.RAY_EPSILON * max(1.0, abs(p[0]), abs(p[1]), abs(p[2])))
+                if any_hit(sa, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack):
+                    continue
+            cr, cg, cb = phong(n, L, V, mat, Id, Is, w * inv_n)
+            r += cr
+            g += cg
+            b += cb
+    return (r, g, b), rays

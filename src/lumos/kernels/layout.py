@@ -1,0 +1,91 @@
+"""The flat arrays the kernels see (`SceneArrays`), and the meaning of their columns.
+
+Built once by `lumos.compile.compile_scene`; every array is contiguous. Triangles and bounded analytic shapes
+share one BVH; its leaves index `prim_ref`, whose entries are a triangle index (>= 0) or the bitwise complement
+of a shape index (< 0). Unbounded shapes (planes) are tested outside the BVH.
+"""
+
+from collections import namedtuple
+
+# Shape kinds: canonical object-space shapes; `shape_xform` maps world points into object space.
+SHAPE_SPHERE = 0  # unit sphere at the origin
+SHAPE_BOX = 1  # the cube [0, 1]^3
+SHAPE_CYLINDER = 2  # x^2 + y^2 = 1, 0 <= z <= 1 (caps at z = 0 and z = 1 when capped)
+SHAPE_CONE = 3  # x^2 + y^2 = (1 - z)^2, 0 <= z <= 1, apex at z = 1 (cap at z = 0 when capped)
+SHAPE_DISK = 4  # x^2 + y^2 <= 1 in the plane z = 0, normal +z
+SHAPE_RECT = 5  # [0, 1]^2 in the plane z = 0, normal +z (area lights)
+SHAPE_PLANE = 6  # the plane z = 0, normal +z (unbounded)
+
+# shape_info / tri_info columns
+INFO_KIND = 0  # shapes only
+INFO_MATERIAL = 1
+INFO_OBJECT = 2
+INFO_FLAGS = 3
+INFO_LIGHT = 4  # area light index for emitter geometry, else -1
+
+FLAG_CAPPED = 1  # shapes: cylinder/cone caps
+FLAG_NORMALS = 1  # triangles: per-vertex shading normals present
+FLAG_UVS = 2  # triangles: per-vertex uvs present
+
+# Material columns (materials: float64 (n, MAT_SIZE))
+MAT_KA = 0
+MAT_KD = 3
+MAT_KS = 6
+MAT_SHININESS = 9
+MAT_KR = 10
+MAT_KT = 13
+MAT_IOR = 16
+MAT_EMISSION = 17
+MAT_SIZE = 20
+
+# Light kinds and columns
+LIGHT_POINT = 0
+LIGHT_DIRECTIONAL = 1
+LIGHT_RECT = 2
+LIGHT_DISK = 3
+LIGHT_SPHERE = 4
+
+# light_vecs: float64 (n, 6, 3)
+LV_POSITION = 0  # point position; rect corner; disk/sphere centre
+LV_DIRECTION = 1  # directional: unit direction of travel; rect/disk: unit normal
+LV_EDGE_U = 2  # rect: edge_u; disk: radius * first tangent
+LV_EDGE_V = 3  # rect: edge_v; disk: radius * second tangent
+LV_DIFFUSE = 4  # Id (point/directional) or radiance Le (area)
+LV_SPECULAR = 5  # Is (point/directional) or radiance Le (area)
+# light_scalars: float64 (n, 5)
+LS_ATT_C = 0
+LS_ATT_L = 1
+LS_ATT_Q = 2
+LS_RADIUS = 3
+LS_AREA = 4
+
+# Camera: cam_vecs float64 (4, 3) = position, u, v, w; cam_params float64 (CAM_SIZE,)
+CAM_ORTHO = 0  # 1.0 for orthographic
+CAM_TAN_HALF_FOV = 1
+CAM_HALF_SIZE = 2  # orthographic: half the vertical extent
+CAM_APERTURE = 3
+CAM_FOCUS = 4
+CAM_SIZE = 5
+
+SceneArrays = namedtuple(
+    "SceneArrays",
+    [
+        "tri_verts",  # float32 (nt, 9): world-space v0, v1, v2
+        "tri_normals",  # float32 (nt, 9): per-vertex shading normals (zeros when absent)
+        "tri_uvs",  # float32 (nt, 6): per-vertex uvs (zeros when absent)
+        "tri_info",  # int32 (nt, 5): see INFO_*
+        "shape_xform",  # float64 (ns, 3, 4): object_from_world
+        "shape_info",  # int32 (ns, 5): see INFO_*
+        "prim_ref",  # int32 (np,): BVH leaf order -> triangle (>= 0) or ~shape (< 0)
+        "node_box",  # float32 (nn, 6): min xyz, max xyz
+        "node_link",  # int32 (nn, 2): interior: (first child, 0), children adjacent; leaf: (first prim, count)
+        "unbounded",  # int32 (nu,): shapes tested outside the BVH
+        "materials",  # float64 (nm, MAT_SIZE)
+        "light_kind",  # int32 (nl,)
+        "light_samples",  # int32 (nl,)
+        "light_vecs",  # float64 (nl, 6, 3)
+        "light_scalars",  # float64 (nl, 5)
+        "ambient",  # float64 (3,)
+        "background",  # float64 (3,)
+    ],
+)

@@ -1,0 +1,113 @@
+"""From a hit record to the surface there: position, geometric and shading normals, UV, material, object.
+
+Normals of analytic shapes come from their canonical form and are carried to world space by the transpose of
+`object_from_world` (the inverse transpose of the placement). Meshes with vertex normals interpolate them.
+"""
+
+import math
+
+from .jit import njit
+from .layout import (
+    FLAG_NORMALS,
+    FLAG_UVS,
+    INFO_FLAGS,
+    INFO_KIND,
+    INFO_LIGHT,
+    INFO_MATERIAL,
+    INFO_OBJECT,
+    SHAPE_BOX,
+    SHAPE_CONE,
+    SHAPE_CYLINDER,
+    SHAPE_PLANE,
+    SHAPE_RECT,
+    SHAPE_SPHERE,
+)
+from .vec import cross, madd, normalize, sub, xform_normal, xform_point
+
+_INV_2PI = 0.5 / math.pi
+
+
+@njit
+def _canonical_normal_uv(kind, part, p):
+    """Object-space normal (not unit) and (u, v) on a canonical shape at point p."""
+    if kind == SHAPE_SPHERE:
+        u = 0.5 + math.atan2(p[0], p[2]) * _INV_2PI
+        v = 0.5 + math.asin(min(1.0, max(-1.0, p[1]))) / math.pi
+        return p, u, v
+    if kind == SHAPE_BOX:
+        axis = part // 2
+        sign = 1.0 if part % 2 == 1 else -1.0
+        if axis == 0:
+            return (sign, 0.0, 0.0), p[2], p[1]
+        if axis == 1:
+            return (0.0, sign, 0.0), p[0], p[2]
+        return (0.0, 0.0, sign), p[0], p[1]
+    if kind == SHAPE_CYLINDER or kind == SHAPE_CONE:
+        if part == 1:
+            return (0.0, 0.0, -1.0), 0.5 + 0.5 * p[0], 0.5 + 0.5 * p[1]
+        if part == 2:
+            return (0.0, 0.0, 1.0), 0.5 + 0.5 * p[0], 0.5 + 0.5 * p[1]
+        u = 0.5 + math.atan2(p[1], p[0]) * _INV_2PI
+        if kind == SHAPE_CYLINDER:
+            return (p[0], p[1], 0.0), u, p[2]
+        n = (p[0], p[1], 1.0 - p[2])
+        if n[0] == 0.0 and n[1] == 0.0:
+            n = (0.0, 0.0, 1.0)  # the apex
+        return n, u, p[2]
+    if kind == SHAPE_RECT or kind == SHAPE_PLANE:
+        return (0.0, 0.0, 1.0), p[0], p[1]
+    return (0.0, 0.0, 1.0), 0.5 + 0.5 * p[0], 0.5 + 0.5 * p[1]  # disk
+
+
+@njit
+def surface_at(sa, o, d, t, ref, b1, b2, part):
+    """Returns (p, n_geometric, n_shading, u, v, material_id, object_id, light_id) for a hit.
+
+    Normals are unit length and not yet turned towards the viewer (see `face_forward`).
+    """
+    p = madd(o, d, t)
+    if ref >= 0:
+        v = sa.tri_verts
+        v0 = (float(v[ref, 0]), float(v[ref, 1]), float(v[ref, 2]))
+        e1 = (v[ref, 3] - v0[0], v[ref, 4] - v0[1], v[ref, 5] - v0[2])
+        e2 = (v[ref, 6] - v0[0], v[ref, 7] - v0[1], v[ref, 8] - v0[2])
+        n_geo = normalize(cross(e1, e2))
+        b0 = 1.0 - b1 - b2
+        info = sa.tri_info[ref]
+        n_sh = n_geo
+        if info[INFO_FLAGS] & FLAG_NORMALS:
+            nn = sa.tri_normals
+            n_sh = normalize((b0 * nn[ref, 0] + b1 * nn[ref, 3] + b2 * nn[ref, 6],
+                              b0 * nn[ref, 1] + b1 * nn[ref, 4] + b2 * nn[ref, 7],
+                              b0 * nn[ref, 2] + b1 * nn[ref, 5] + b2 * nn[ref, 8]))
+            if n_sh[0] == 0.0 and n_sh[1] == 0.0 and n_sh[2] == 0.0:
+                n_sh = n_geo
+        u, w = b1, b2
+        if info[INFO_FLAGS] & FLAG_UVS:
+            uv = sa.tri_uvs
+            u = b0 * uv[ref, 0] + b1 * uv[ref, 2] + b2 * uv[ref, 4]
+            w = b0 * uv[ref, 1] + b1 * uv[ref, 3] + b2 * uv[ref, 5]
+        return p, n_geo, n_sh, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]
+    s = ~ref
+    info = sa.shape_info[s]
+    m = sa.shape_xform[s]
+    n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], part, xform_point(m, p))
+    n = normalize(xform_normal(m, n_obj))
+    return p, n, n, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]
+
+
+@njit
+def face_forward(n, d):
+    """n turned to face against the ray direction d (towards the viewer): planes and meshes are two-sided."""
+    if n[0] * d[0] + n[1] * d[1] + n[2] * d[2] > 0.0:
+        return (-n[0], -n[1], -n[2])
+    return n
+
+
+@njit
+def offset_origin(p, n, d_out, eps):
+    """A ray origin off the surface at p, on the side d_out leaves towards (avoids self-intersection)."""
+    scale = eps * max(1.0, abs(p[0]), abs(p[1]), abs(p[2]))
+    if n[0] * d_out[0] + n[1] * d_out[1] + n[2] * d_out[2] < 0.0:
+        scale = -scale
+    return madd(p, n, scale)

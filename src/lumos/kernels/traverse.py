@@ -1,0 +1,139 @@
+"""BVH traversal: closest hit and any hit, with a fixed stack supplied by the caller (one per thread/row).
+
+Children are stored next to each other: at an interior node both child boxes are tested, the nearer is visited
+first and the farther pushed with its entry distance, so a popped node is skipped once a closer hit is known.
+Unbounded shapes (planes) are tested before the tree.
+"""
+
+from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
+from .jit import njit
+from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND
+
+
+@njit
+def _shape_hit(sa, s, o, d, t_min, t_max):
+    info = sa.shape_info[s]
+    return intersect_shape(info[INFO_KIND], info[INFO_FLAGS] & FLAG_CAPPED, sa.shape_xform[s], o, d, t_min, t_max)
+
+
+@njit
+def closest_hit(sa, o, d, t_min, t_max, stack, stack_t):
+    """Nearest intersection with t_min < t < t_max.
+
+    Returns (t, ref, b1, b2, part): ref is a triangle index (>= 0) or ~shape index (< 0); b1, b2 are the
+    barycentrics of a triangle hit, part the face of a shape hit. t = -1 when nothing is hit.
+    """
+    best_t = t_max
+    best_ref = 0
+    best_b1 = 0.0
+    best_b2 = 0.0
+    best_part = 0
+    hit = False
+    for k in range(sa.unbounded.shape[0]):
+        s = sa.unbounded[k]
+        t, part = _shape_hit(sa, s, o, d, t_min, best_t)
+        if t != NO_HIT:
+            best_t, best_ref, best_part, hit = t, ~s, part, True
+    box = sa.node_box
+    link = sa.node_link
+    if box.shape[0] > 0:
+        rb = box_setup(o, d)
+        setup = triangle_setup(d)
+        node = 0
+        sp = 0
+        active = intersect_node_box(box, 0, rb, best_t) != NO_HIT
+        while active:
+            count = link[node, 1]
+            if count > 0:
+                # leaf: test its primitives
+                first = link[node, 0]
+                for k in range(first, first + count):
+                    r = sa.prim_ref[k]
+                    if r >= 0:
+                        t, b1, b2 = intersect_triangle(o, setup, sa.tri_verts, r, best_t)
+                        if t > t_min:
+                            best_t, best_ref, best_b1, best_b2, hit = t, r, b1, b2, True
+                    else:
+                        t, part = _shape_hit(sa, ~r, o, d, t_min, best_t)
+                        if t != NO_HIT:
+                            best_t, best_ref, best_part, hit = t, r, part, True
+            else:
+                # interior: visit the nearer child, push the farther
+                c = link[node, 0]
+                t_left = intersect_node_box(box, c, rb, best_t)
+                t_right = intersect_node_box(box, c + 1, rb, best_t)
+                if t_left != NO_HIT and t_right != NO_HIT:
+                    if t_left <= t_right:
+                        node = c
+                        stack[sp], stack_t[sp] = c + 1, t_right
+                    else:
+                        node = c + 1
+                        stack[sp], stack_t[sp] = c, t_left
+                    sp += 1
+                    continue
+                if t_left != NO_HIT:
+                    node = c
+                    continue
+                if t_right != NO_HIT:
+                    node = c + 1
+                    continue
+            # pop the next node that may still hold a closer hit
+            active = False
+            while sp > 0:
+                sp -= 1
+                if stack_t[sp] < best_t:
+                    node = stack[sp]
+                    active = True
+                    break
+    if not hit:
+        return NO_HIT, 0, 0.0, 0.0, 0
+    return best_t, best_ref, best_b1, best_b2, best_part
+
+
+@njit
+def any_hit(sa, o, d, t_min, t_max, stack):
+    """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
+    for k in range(sa.unbounded.shape[0]):
+        t, part = _shape_hit(sa, sa.unbounded[k], o, d, t_min, t_max)
+        if t != NO_HIT:
+            return True
+    box = sa.node_box
+    link = sa.node_link
+    if box.shape[0] == 0:
+        return False
+    rb = box_setup(o, d)
+    setup = triangle_setup(d)
+    if intersect_node_box(box, 0, rb, t_max) == NO_HIT:
+        return False
+    node = 0
+    sp = 0
+    while True:
+        count = link[node, 1]
+        if count > 0:
+            first = link[node, 0]
+            for k in range(first, first + count):
+                r = sa.prim_ref[k]
+                if r >= 0:
+                    t, b1, b2 = intersect_triangle(o, setup, sa.tri_verts, r, t_max)
+                    if t > t_min:
+                        return True
+                else:
+                    t, part = _shape_hit(sa, ~r, o, d, t_min, t_max)
+                    if t != NO_HIT:
+                        return True
+        else:
+            c = link[node, 0]
+            hit_left = intersect_node_box(box, c, rb, t_max) != NO_HIT
+            hit_right = intersect_node_box(box, c + 1, rb, t_max) != NO_HIT
+            if hit_left and hit_right:
+                node = c
+                stack[sp] = c + 1
+                sp += 1
+                continue
+            if hit_left or hit_right:
+                node = c if hit_left else c + 1
+                continue
+        if sp == 0:
+            return False
+        sp -= 1
+        node = stack[sp]

@@ -1,0 +1,61 @@
+"""What every method shares: the film buffers it fills, thread settings, and row bands for progress reports."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+
+from ..errors import LumosError
+
+
+@dataclass
+class Film:
+    """A method's output: linear radiance float32 (H, W, 3), the requested AOVs, and how many rays it traced."""
+
+    radiance: np.ndarray
+    aovs: dict = field(default_factory=dict)
+    rays: int = 0
+    threads: int = 1
+
+
+def allocate_aovs(height: int, width: int):
+    """Buffers for every AOV (depth, normal, albedo, object_id); methods fill all, the film keeps the requested."""
+    depth = np.full((height, width), np.inf, np.float32)
+    normal = np.zeros((height, width, 3), np.float32)
+    albedo = np.zeros((height, width, 3), np.float32)
+    object_id = np.full((height, width), -1, np.int32)
+    return depth, normal, albedo, object_id
+
+
+def set_threads(threads: int | None) -> int:
+    """Use `threads` worker threads (at most the cores Numba was started with); returns the number used."""
+    available = numba.config.NUMBA_NUM_THREADS
+    n = available if threads is None else threads
+    if n > available:
+        raise LumosError(f"--threads {n}: at most {available} threads are available (NUMBA_NUM_THREADS)")
+    numba.set_num_threads(n)
+    return n
+
+
+def row_bands(height: int, bands: int = 48):
+    """(y0, y1) ranges covering the image, so a kernel can be run band by band between progress reports."""
+    step = max(1, -(-height // bands))
+    return [(y0, min(height, y0 + step)) for y0 in range(0, height, step)]
+
+
+def check_memory(width: int, height: int, bytes_per_pixel: int = 64) -> None:
+    """Refuse images whose buffers would not fit in memory, before allocating anything."""
+    import os
+
+    need = width * height * bytes_per_pixel
+    try:
+        avail = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return
+    if need > 0.8 * avail:
+        raise LumosError(
+            f"render: {width}x{height} needs about {need / 2**30:.1f} GiB of buffers, "
+            f"more than the {avail / 2**30:.1f} GiB of memory available"
+        )

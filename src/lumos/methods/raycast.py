@@ -1,0 +1,101 @@
+"""Ray casting: one ray per pixel (or `spp` stratified jittered rays, box filter), nearest hit, local illumination.
+
+Each camera ray finds its nearest hit through the BVH; the surface there is shaded by the classic model
+(`kernels.illumination.illuminate`) with no shadow rays: a surface that faces a light is lit by it (the
+textbook's simplifying assumption of ray casting). A ray that reaches an area light sees its radiance; a ray
+that hits nothing returns the background.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import config
+from ..compile.camera import camera_arrays
+from ..kernels.camera import camera_ray
+from ..kernels.illumination import illuminate
+from ..kernels.jit import njit, njit_parallel, prange
+from ..kernels.layout import LIGHT_SPHERE, MAT_EMISSION, MAT_KD
+from ..kernels.surface import surface_at
+from ..kernels.traverse import closest_hit
+from ..kernels.vec import dot, mul
+from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
+
+
+@njit
+def shade_hit(sa, o, d, hit, seed, pixel, sample, shadows, stack):
+    """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays)."""
+    t, ref, b1, b2, part = hit
+    p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(sa, o, d, t, ref, b1, b2, part)
+    mat = sa.materials[mat_id]
+    V = mul(d, -1.0)
+    # emitted light: two-sided for emissive materials, one-sided for rect and disk area lights
+    emit = 1.0
+    if light_id >= 0 and sa.light_kind[light_id] != LIGHT_SPHERE and dot(n_geo, V) < 0.0:
+        emit = 0.0
+    # the shading normal faces the viewer (DESIGN.md §3)
+    if dot(n_sh, V) < 0.0:
+        n_sh = mul(n_sh, -1.0)
+    (r, g, b), rays = illuminate(sa, p, n_sh, V, mat_id, seed, pixel, sample, shadows, stack)
+    rgb = (r + emit * mat[MAT_EMISSION], g + emit * mat[MAT_EMISSION + 1], b + emit * mat[MAT_EMISSION + 2])
+    kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
+    return rgb, n_sh, kd, object_id, rays
+
+
+@njit_parallel
+def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
+                  radiance, depth, normal, albedo, object_id, rays_per_row):
+    for y in prange(y0, y1):
+        stack = np.empty(config.BVH_STACK, np.int64)
+        stack_t = np.empty(config.BVH_STACK)
+        rays = 0
+        for x in range(width):
+            pixel = y * width + x
+            r = g = b = 0.0
+            for s in range(spp):
+                # stage 1: camera ray; stage 2: nearest hit; stage 3: local illumination
+                o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
+                hit = closest_hit(sa, o, d, 0.0, config.T_FAR, stack, stack_t)
+                rays += 1
+                if hit[0] < 0.0:
+                    r += sa.background[0]
+                    g += sa.background[1]
+                    b += sa.background[2]
+                    continue
+                rgb, n_sh, kd, obj, extra = shade_hit(sa, o, d, hit, seed, pixel, s, False, stack)
+                rays += extra
+                r += rgb[0]
+                g += rgb[1]
+                b += rgb[2]
+                if s == 0:  # AOVs come from the first sample of each pixel
+                    depth[y, x] = hit[0]
+                    normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_sh
+                    albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = kd
+                    object_id[y, x] = obj
+            inv = 1.0 / spp
+            radiance[y, x, 0] = r * inv
+            radiance[y, x, 1] = g * inv
+            radiance[y, x, 2] = b * inv
+        rays_per_row[y] = rays
+
+
+def render_raycast(compiled, camera, settings, progress=None) -> Film:
+    """Ray-cast `compiled` (a `CompiledScene`) through `camera` with `settings` (a `RenderSettings`).
+
+    `progress(fraction)` is called after each band of rows. Returns a `Film`.
+    """
+    width, height = settings.width, settings.height
+    check_memory(width, height)
+    threads = set_threads(settings.threads)
+    cam_vecs, cam_params = camera_arrays(camera)
+    radiance = np.zeros((height, width, 3), np.float32)
+    depth, normal, albedo, object_id = allocate_aovs(height, width)
+    rays_per_row = np.zeros(height, np.int64)
+    for y0, y1 in row_bands(height):
+        _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, y0, y1, settings.spp, settings.seed,
+                      radiance, depth, normal, albedo, object_id, rays_per_row)
+        if progress is not None:
+            progress(y1 / height)
+    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id}
+    aovs = {name: all_aovs[name] for name in settings.aov}
+    return Film(radiance, aovs, int(rays_per_row.sum()), threads)

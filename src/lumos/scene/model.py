@@ -1,0 +1,518 @@
+"""The validated scene model: camera, render settings, lights, materials and objects.
+
+Plain pydantic models, pure Python (NumPy only for mesh arrays; never Numba). Field names are the scene-file
+keys of `docs/scene-format.md`; the conventions (camera basis, light units, shading normal) are those of
+DESIGN.md. The compile step (`lumos.compile`) turns a `Scene` into flat arrays for the kernels.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any, Literal, Optional, Union
+
+import numpy as np
+from pydantic import Discriminator, Field, PrivateAttr, Tag, field_validator, model_validator
+
+from .types import (
+    Color,
+    Direction,
+    Finite,
+    NonNegative,
+    Positive,
+    StrictModel,
+    Vec3,
+    cross,
+    norm,
+    sub,
+)
+
+# --------------------------------------------------------------------------------------------------- camera
+
+
+class Camera(StrictModel):
+    """Pinhole or thin-lens perspective camera (vertical `fov` in degrees), or orthographic (`size` tall)."""
+
+    type: Literal["perspective", "orthographic"] = "perspective"
+    position: Vec3 = (0.0, 0.0, 5.0)
+    look_at: Vec3 = (0.0, 0.0, 0.0)
+    up: Vec3 = (0.0, 1.0, 0.0)
+    fov: Annotated[float, Field(gt=0, lt=180)] = 45.0
+    size: Positive = 2.0
+    aperture: NonNegative = 0.0
+    focus_distance: Optional[Positive] = None
+
+    @model_validator(mode="after")
+    def _check_basis(self):
+        view = sub(self.position, self.look_at)
+        if norm(view) <= 1e-12:
+            raise ValueError("position and look_at must differ")
+        if norm(self.up) <= 1e-12:
+            raise ValueError("up must not be the zero vector")
+        c = cross(self.up, view)
+        if norm(c) <= 1e-9 * norm(self.up) * norm(view):
+            raise ValueError("up is parallel to the view direction (position - look_at); choose another up")
+        return self
+
+    def basis(self):
+        """(u, v, w) as in DESIGN.md: w = normalize(position − look_at), u = normalize(up × w), v = w × u."""
+        w = np.subtract(self.position, self.look_at)
+        w = w / np.linalg.norm(w)
+        u = np.cross(self.up, w)
+        u = u / np.linalg.norm(u)
+        v = np.cross(w, u)
+        return u, v, w
+
+    def resolved_focus_distance(self) -> float:
+        if self.focus_distance is not None:
+            return self.focus_distance
+        return float(np.linalg.norm(np.subtract(self.position, self.look_at)))
+
+
+# ------------------------------------------------------------------------------------------ render settings
+
+AOV_NAMES = ("depth", "normal", "albedo", "object_id")
+
+
+class RenderSettings(StrictModel):
+    """The `render:` block: which method and its settings. CLI flags and `render(**settings)` override it."""
+
+    method: str = "raycast"
+    width: Annotated[int, Field(ge=1, le=65536)] = 640
+    height: Annotated[int, Field(ge=1, le=65536)] = 480
+    spp: Annotated[int, Field(ge=1, le=1 << 20)] = 1
+    max_depth: Annotated[int, Field(ge=0, le=256)] = 5
+    seed: Annotated[int, Field(ge=0, lt=1 << 32)] = 0
+    shading: Literal["flat", "gouraud", "phong"] = "phong"
+    exposure: Positive = 1.0
+    threads: Optional[Annotated[int, Field(ge=1, le=1024)]] = None
+    aov: list[Literal["depth", "normal", "albedo", "object_id"]] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _check_size(self):
+        from ..config import MAX_PIXELS
+
+        if self.width * self.height > MAX_PIXELS:
+            raise ValueError(
+                f"{self.width}x{self.height} is too large ({self.width * self.height:,} pixels; "
+                f"at most {MAX_PIXELS:,})"
+            )
+        return self
+
+
+# -------------------------------------------------------------------------------------------------- material
+
+
+class Material(StrictModel):
+    """Coefficients of the classic model, per RGB channel (a scalar means grey). Missing ones are 0."""
+
+    ka: Color = (0.0, 0.0, 0.0)
+    kd: Color = (0.0, 0.0, 0.0)
+    ks: Color = (0.0, 0.0, 0.0)
+    shininess: NonNegative = 1.0
+    kr: Color = (0.0, 0.0, 0.0)
+    kt: Color = (0.0, 0.0, 0.0)
+    ior: Positive = 1.0
+    emission: Color = (0.0, 0.0, 0.0)
+
+
+#: The material of an object that names none: a matte light grey.
+DEFAULT_MATERIAL = Material(ka=0.8, kd=0.8)
+
+
+def _material_tag(value: Any) -> str:
+    return "name" if isinstance(value, str) else "inline"
+
+
+MaterialRef = Annotated[
+    Union[Annotated[str, Tag("name")], Annotated[Material, Tag("inline")]],
+    Discriminator(_material_tag),
+]
+
+# ------------------------------------------------------------------------------------------------- transform
+
+
+Row4 = tuple[Finite, Finite, Finite, Finite]
+
+
+class Transform(StrictModel):
+    """world_from_object = T(translate) · Rz · Ry · Rx · S(scale), or an explicit 4×4 `matrix`."""
+
+    translate: Vec3 = (0.0, 0.0, 0.0)
+    rotate: Vec3 = (0.0, 0.0, 0.0)
+    scale: Union[Vec3, Finite] = 1.0
+    matrix: Optional[tuple[Row4, Row4, Row4, Row4]] = None
+
+    @field_validator("scale", mode="before")
+    @classmethod
+    def _scale_list(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @field_validator("matrix", mode="before")
+    @classmethod
+    def _matrix_rows(cls, v):
+        if isinstance(v, list):
+            return tuple(tuple(r) if isinstance(r, list) else r for r in v)
+        return v
+
+    @model_validator(mode="after")
+    def _check(self):
+        s = self.scale if isinstance(self.scale, tuple) else (self.scale,) * 3
+        if any(c == 0 for c in s):
+            raise ValueError("scale must not be zero on any axis")
+        if self.matrix is not None:
+            explicit = self.model_fields_set & {"translate", "rotate", "scale"}
+            if explicit:
+                raise ValueError(f"give either matrix or {'/'.join(sorted(explicit))}, not both")
+            m = np.array(self.matrix, dtype=np.float64)
+            if not np.allclose(m[3], [0, 0, 0, 1]):
+                raise ValueError("matrix: the last row must be [0, 0, 0, 1] (affine transforms only)")
+            if abs(np.linalg.det(m[:3, :3])) < 1e-12:
+                raise ValueError("matrix is singular")
+        return self
+
+    def to_matrix(self) -> np.ndarray:
+        """The 4×4 world_from_object matrix (float64)."""
+        if self.matrix is not None:
+            return np.array(self.matrix, dtype=np.float64)
+        s = self.scale if isinstance(self.scale, tuple) else (self.scale,) * 3
+        rx, ry, rz = (math.radians(a) for a in self.rotate)
+        cx, sx, cy, sy, cz, sz = math.cos(rx), math.sin(rx), math.cos(ry), math.sin(ry), math.cos(rz), math.sin(rz)
+        Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+        Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+        Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+        m = np.eye(4)
+        m[:3, :3] = Rz @ Ry @ Rx @ np.diag(s)
+        m[:3, 3] = self.translate
+        return m
+
+
+# --------------------------------------------------------------------------------------------------- objects
+
+
+class ObjectBase(StrictModel):
+    name: Optional[str] = None
+    material: Optional[MaterialRef] = None
+    transform: Optional[Transform] = None
+
+
+class Sphere(ObjectBase):
+    type: Literal["sphere"]
+    center: Vec3 = (0.0, 0.0, 0.0)
+    radius: Positive = 1.0
+
+
+class Plane(ObjectBase):
+    type: Literal["plane"]
+    point: Vec3 = (0.0, 0.0, 0.0)
+    normal: Direction = (0.0, 1.0, 0.0)
+
+
+class Box(ObjectBase):
+    type: Literal["box"]
+    min: Vec3 = (-1.0, -1.0, -1.0)
+    max: Vec3 = (1.0, 1.0, 1.0)
+
+    @model_validator(mode="after")
+    def _check(self):
+        if any(lo >= hi for lo, hi in zip(self.min, self.max)):
+            raise ValueError("min must be smaller than max on every axis")
+        return self
+
+
+class _Axial(ObjectBase):
+    base: Vec3 = (0.0, 0.0, 0.0)
+    top: Vec3 = (0.0, 1.0, 0.0)
+    radius: Positive = 1.0
+    capped: bool = True
+
+    @model_validator(mode="after")
+    def _check(self):
+        if norm(sub(self.top, self.base)) <= 1e-12:
+            raise ValueError("base and top must differ")
+        return self
+
+
+class Cylinder(_Axial):
+    type: Literal["cylinder"]
+
+
+class Cone(_Axial):
+    """A cone with radius `radius` at `base` and its apex at `top`."""
+
+    type: Literal["cone"]
+
+
+class Disk(ObjectBase):
+    type: Literal["disk"]
+    center: Vec3 = (0.0, 0.0, 0.0)
+    normal: Direction = (0.0, 1.0, 0.0)
+    radius: Positive = 1.0
+
+
+class Triangle(ObjectBase):
+    type: Literal["triangle"]
+    vertices: tuple[Vec3, Vec3, Vec3]
+
+    @field_validator("vertices", mode="before")
+    @classmethod
+    def _as_tuple(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @model_validator(mode="after")
+    def _check(self):
+        a, b, c = self.vertices
+        if norm(cross(sub(b, a), sub(c, a))) <= 1e-18:
+            raise ValueError("the triangle is degenerate (its vertices are collinear)")
+        return self
+
+
+def _array(value, name: str, cols: int, dtype, allow_polygons: bool = False) -> np.ndarray:
+    """Validate a list or NumPy array of rows of `cols` numbers; returns a contiguous array."""
+    if isinstance(value, (str, bytes, dict)) or isinstance(value, bool):
+        raise ValueError(f"{name} must be a list of [{', '.join('x' * 1 for _ in range(cols))}] rows")
+    try:
+        arr = np.asarray(value, dtype=dtype)
+    except (ValueError, TypeError):
+        raise ValueError(f"{name} must be a list of rows of {cols} numbers") from None
+    if arr.ndim != 2 or arr.shape[1] != cols or arr.shape[0] == 0:
+        raise ValueError(f"{name} must be a non-empty list of rows of {cols} numbers, got shape {arr.shape}")
+    if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
+        bad = int(np.argwhere(~np.isfinite(arr))[0][0])
+        raise ValueError(f"{name}[{bad}] is not finite (NaN or Inf)")
+    return np.ascontiguousarray(arr)
+
+
+class Mesh(ObjectBase):
+    """A triangle mesh from a `file` (OBJ, PLY, STL, glTF…) or from inline `vertices` + `faces`.
+
+    After loading, `vertices` (n, 3) float64, `faces` (m, 3) int64 and the optional per-vertex `normals`
+    (n, 3) and `uvs` (n, 2) are NumPy arrays whichever way the mesh was given. Polygon faces are
+    fan-triangulated (convex polygons).
+    """
+
+    model_config = dict(StrictModel.model_config, arbitrary_types_allowed=True)
+    type: Literal["mesh"]
+    file: Optional[str] = None
+    vertices: Optional[Any] = None
+    faces: Optional[Any] = None
+    normals: Optional[Any] = None
+    uvs: Optional[Any] = None
+    _source: Optional[Path] = PrivateAttr(default=None)
+
+    @field_validator("vertices", "normals", mode="after")
+    @classmethod
+    def _vec_rows(cls, v, info):
+        return None if v is None else _array(v, info.field_name, 3, np.float64)
+
+    @field_validator("uvs", mode="after")
+    @classmethod
+    def _uv_rows(cls, v):
+        return None if v is None else _array(v, "uvs", 2, np.float64)
+
+    @field_validator("faces", mode="after")
+    @classmethod
+    def _faces(cls, v):
+        if v is None:
+            return None
+        if isinstance(v, np.ndarray):
+            if v.dtype.kind not in "iu":
+                raise ValueError("faces must hold integer vertex indices")
+            return _array(v, "faces", 3, np.int64)
+        if not isinstance(v, (list, tuple)) or not v:
+            raise ValueError("faces must be a non-empty list of vertex-index lists")
+        tris = []
+        for i, f in enumerate(v):
+            if not isinstance(f, (list, tuple)) or len(f) < 3:
+                raise ValueError(f"faces[{i}] must list at least 3 vertex indices")
+            if not all(isinstance(k, int) and not isinstance(k, bool) for k in f):
+                raise ValueError(f"faces[{i}] must hold integer vertex indices")
+            tris.extend((f[0], f[j], f[j + 1]) for j in range(1, len(f) - 1))
+        return np.asarray(tris, dtype=np.int64)
+
+    @model_validator(mode="after")
+    def _check(self):
+        if (self.file is None) == (self.vertices is None):
+            raise ValueError("give either file or vertices + faces")
+        if self.file is not None:
+            for key in ("faces", "normals", "uvs"):
+                if getattr(self, key) is not None:
+                    raise ValueError(f"{key} cannot be given with file (it comes from the file)")
+            return self
+        if self.faces is None:
+            raise ValueError("vertices need faces")
+        self.check_arrays()
+        return self
+
+    def check_arrays(self) -> None:
+        """Index range and per-vertex array lengths (also run after a file is loaded)."""
+        n = len(self.vertices)
+        if self.faces.size and (self.faces.min() < 0 or self.faces.max() >= n):
+            bad = int(np.argwhere((self.faces < 0) | (self.faces >= n))[0][0])
+            raise ValueError(f"faces[{bad}] refers to a vertex that does not exist (there are {n})")
+        for key in ("normals", "uvs"):
+            arr = getattr(self, key)
+            if arr is not None and len(arr) != n:
+                raise ValueError(f"{key} has {len(arr)} rows but there are {n} vertices")
+
+    @property
+    def triangle_count(self) -> int:
+        return 0 if self.faces is None else len(self.faces)
+
+
+Object = Annotated[
+    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Triangle, Mesh],
+    Field(discriminator="type"),
+]
+OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "triangle", "mesh")
+
+# ---------------------------------------------------------------------------------------------------- lights
+
+
+class _LocalLight(StrictModel):
+    """Id and Is of the classic model: `intensity` sets both; `diffuse` / `specular` override one."""
+
+    intensity: Color = (1.0, 1.0, 1.0)
+    diffuse: Optional[Color] = None
+    specular: Optional[Color] = None
+
+    @property
+    def diffuse_intensity(self):
+        return self.diffuse if self.diffuse is not None else self.intensity
+
+    @property
+    def specular_intensity(self):
+        return self.specular if self.specular is not None else self.intensity
+
+
+class PointLight(_LocalLight):
+    type: Literal["point"]
+    position: Vec3
+    attenuation: tuple[NonNegative, NonNegative, NonNegative] = (1.0, 0.0, 0.0)
+
+    @field_validator("attenuation", mode="before")
+    @classmethod
+    def _att_tuple(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @model_validator(mode="after")
+    def _check(self):
+        if sum(self.attenuation) <= 0:
+            raise ValueError("attenuation [c, l, q] must not be all zero")
+        return self
+
+
+class DirectionalLight(_LocalLight):
+    """A parallel light travelling along `direction` (so L = −direction)."""
+
+    type: Literal["directional"]
+    direction: Direction
+
+
+class _AreaLight(StrictModel):
+    type: Literal["area"]
+    radiance: Color = (1.0, 1.0, 1.0)
+    samples: Annotated[int, Field(ge=1, le=4096)] = 16
+
+
+class RectLight(_AreaLight):
+    """Emits on the side of cross(edge_u, edge_v) only."""
+
+    shape: Literal["rect"]
+    corner: Vec3
+    edge_u: Vec3
+    edge_v: Vec3
+
+    @model_validator(mode="after")
+    def _check(self):
+        if norm(cross(self.edge_u, self.edge_v)) <= 1e-18:
+            raise ValueError("edge_u and edge_v must be non-zero and not parallel")
+        return self
+
+
+class DiskLight(_AreaLight):
+    """Emits on the side of `normal` only."""
+
+    shape: Literal["disk"]
+    center: Vec3
+    normal: Direction
+    radius: Positive
+
+
+class SphereLight(_AreaLight):
+    """Emits outward from its whole surface."""
+
+    shape: Literal["sphere"]
+    center: Vec3
+    radius: Positive
+
+
+def _light_tag(value: Any) -> Optional[str]:
+    if not isinstance(value, dict):
+        return None
+    kind = value.get("type")
+    if kind == "area":
+        shape = value.get("shape")
+        return f"area.{shape}" if shape in ("rect", "disk", "sphere") else "area.?"
+    return kind if isinstance(kind, str) else None
+
+
+Light = Annotated[
+    Union[
+        Annotated[PointLight, Tag("point")],
+        Annotated[DirectionalLight, Tag("directional")],
+        Annotated[RectLight, Tag("area.rect")],
+        Annotated[DiskLight, Tag("area.disk")],
+        Annotated[SphereLight, Tag("area.sphere")],
+    ],
+    Discriminator(
+        _light_tag,
+        custom_error_type="light_type",
+        custom_error_message="lights need type: point, directional or area (area needs shape: rect, disk or sphere)",
+    ),
+]
+LIGHT_TYPES = ("point", "directional", "area")
+
+# ----------------------------------------------------------------------------------------------------- scene
+
+
+class Scene(StrictModel):
+    """A whole scene. Build one with `lumos.load_scene(path_or_dict)`."""
+
+    camera: Camera = Field(default_factory=Camera)
+    render: RenderSettings = Field(default_factory=RenderSettings)
+    ambient: Color = (0.0, 0.0, 0.0)
+    background: Color = (0.0, 0.0, 0.0)
+    lights: list[Light] = Field(default_factory=list)
+    materials: dict[str, Material] = Field(default_factory=dict)
+    objects: list[Object] = Field(default_factory=list)
+    _source: Optional[Path] = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _check_material_names(self):
+        for i, obj in enumerate(self.objects):
+            if isinstance(obj.material, str) and obj.material not in self.materials:
+                known = ", ".join(sorted(self.materials)) or "none are defined"
+                raise UnknownMaterial(i, obj.material, known)
+        return self
+
+    def material_of(self, obj) -> Material:
+        if obj.material is None:
+            return DEFAULT_MATERIAL
+        if isinstance(obj.material, str):
+            return self.materials[obj.material]
+        return obj.material
+
+    @property
+    def source(self) -> Optional[Path]:
+        """The file the scene was loaded from (None for a dict)."""
+        return self._source
+
+
+class UnknownMaterial(ValueError):
+    """Raised by Scene validation; the loader reports it at objects[i].material."""
+
+    def __init__(self, index: int, name: str, known: str):
+        super().__init__(f"unknown material '{name}' (defined: {known})")
+        self.index = index
+        self.name = name
