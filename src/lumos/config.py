@@ -7,6 +7,8 @@ T_FAR = 1e30
 #: BVH: primitives per leaf at most, and SAH bins.
 BVH_MAX_LEAF = 4
 BVH_BINS = 16
+#: SAH cost of one traversal step (two child-box tests) relative to one primitive test.
+BVH_COST_TRAVERSAL = 1.0
 #: BVH traversal stack depth (the builder guarantees the tree is not deeper).
 BVH_STACK = 64
 #: Largest image the film will allocate (pixels), and the default render size.

@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import config
 from ..kernels import layout as L
-from .bvh import build
+from .bvh import build, pack_nodes
 from .shapes import canonical, rect_canonical, world_bounds
 
 
@@ -189,6 +189,7 @@ def compile_scene(scene) -> CompiledScene:
     t0 = time.perf_counter()
     node_box, node_link, order, depth = build(prim_bounds)
     build_s = time.perf_counter() - t0
+    node_box, node_link = pack_nodes(node_box, node_link)
 
     # leaf order: triangles are permuted so that leaves read them contiguously
     is_tri = order < n_tri

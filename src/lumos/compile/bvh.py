@@ -8,10 +8,24 @@ from .. import config
 from ..kernels.bvh_build import build_bvh
 
 
-def build(prim_bounds: np.ndarray):
+def build(prim_bounds: np.ndarray, max_leaf: int | None = None, cost_traversal: float | None = None):
     """BVH over boxes float64 (n, 6). Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,),
     depth). An empty scene gives an empty tree."""
     if len(prim_bounds) == 0:
         return np.zeros((0, 6), np.float32), np.zeros((0, 2), np.int32), np.zeros(0, np.int64), 0
     bounds = np.ascontiguousarray(prim_bounds, dtype=np.float64)
-    return build_bvh(bounds, config.BVH_MAX_LEAF, config.BVH_BINS)
+    max_leaf = config.BVH_MAX_LEAF if max_leaf is None else max_leaf
+    cost = config.BVH_COST_TRAVERSAL if cost_traversal is None else cost_traversal
+    return build_bvh(bounds, max_leaf, config.BVH_BINS, float(cost))
+
+
+def pack_nodes(node_box: np.ndarray, node_link: np.ndarray):
+    """Interleave bounds and links into 32-byte nodes: (float32 (nn, 8), its int32 view) — see kernels.layout."""
+    from ..kernels.layout import NODE_COUNT, NODE_FIRST
+
+    packed = np.zeros((len(node_box), 8), np.float32)
+    packed[:, :6] = node_box
+    links = packed.view(np.int32)
+    links[:, NODE_FIRST] = node_link[:, 0]
+    links[:, NODE_COUNT] = node_link[:, 1]
+    return packed, links

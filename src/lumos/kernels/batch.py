@@ -4,7 +4,7 @@ import numpy as np
 
 from .. import config
 from .jit import njit_parallel, prange
-from .traverse import any_hit, closest_hit
+from .traverse import any_hit, closest_hit, geometry_of
 
 _CHUNK = 256
 
@@ -16,12 +16,13 @@ def trace_closest(sa, origins, directions, t_max, t_out, ref_out, b_out):
     n = origins.shape[0]
     n_chunks = (n + _CHUNK - 1) // _CHUNK
     for c in prange(n_chunks):
+        geo = geometry_of(sa)  # per task: parfor bodies cannot capture a namedtuple built outside them
         stack = np.empty(config.BVH_STACK, np.int64)
         stack_t = np.empty(config.BVH_STACK)
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
             o = (origins[i, 0], origins[i, 1], origins[i, 2])
             d = (directions[i, 0], directions[i, 1], directions[i, 2])
-            t, ref, b1, b2, part = closest_hit(sa, o, d, 0.0, t_max, stack, stack_t)
+            t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, t_max, stack, stack_t)
             t_out[i] = t
             ref_out[i] = ref
             b_out[i, 0] = b1
@@ -34,8 +35,9 @@ def trace_any(sa, origins, directions, t_max, hit_out):
     n = origins.shape[0]
     n_chunks = (n + _CHUNK - 1) // _CHUNK
     for c in prange(n_chunks):
+        geo = geometry_of(sa)  # per task: parfor bodies cannot capture a namedtuple built outside them
         stack = np.empty(config.BVH_STACK, np.int64)
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
             o = (origins[i, 0], origins[i, 1], origins[i, 2])
             d = (directions[i, 0], directions[i, 1], directions[i, 2])
-            hit_out[i] = any_hit(sa, o, d, 0.0, t_max[i], stack)
+            hit_out[i] = any_hit(geo, o, d, 0.0, t_max[i], stack)

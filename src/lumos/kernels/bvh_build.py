@@ -1,147 +1,149 @@
 """Binned SAH BVH construction (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies").
 
-Top-down and iterative: each node's primitives are binned by centroid into `n_bins` buckets on all three axes in
-one pass, the split with the least surface-area cost is taken, and the index range is partitioned in place. The
-two children of a node are stored next to each other, so traversal tests both boxes from one cache line.
-Nodes with more than `PARALLEL_MIN` primitives are binned in parallel chunks.
+Top-down and iterative. At each node the primitives are binned by centroid into `n_bins` buckets on all three
+axes in one pass; the split with the least surface-area cost is taken; the index range is partitioned in place,
+and the same pass gathers both children's centroid bounds (their boxes come from the bins). The two children of
+a node are stored next to each other, so traversal tests both boxes from one cache line.
+
+Parallelism: the top of the tree is built first (large nodes bin in parallel chunks); every node below
+`task_size` primitives becomes a task, the tasks are built in parallel into their own node regions
+(a subtree of n primitives needs at most 2n − 1 nodes), and the regions are compacted at the end.
 """
 
 import numpy as np
 
 from .jit import njit, njit_parallel, prange
 
-#: SAH cost of one traversal step relative to one primitive test.
-COST_TRAVERSAL = 1.0
 #: Trees deeper than this make leaves (the traversal stack is 64 entries; one push per level at most).
 MAX_DEPTH = 60
+#: Nodes with at least this many primitives bin in parallel chunks.
 PARALLEL_MIN = 1 << 16
 _CHUNKS = 16
 
 
 @njit
-def _area(bmin0, bmin1, bmin2, bmax0, bmax1, bmax2):
-    dx = bmax0 - bmin0
-    dy = bmax1 - bmin1
-    dz = bmax2 - bmin2
+def _half_area(b):
+    dx = b[3] - b[0]
+    dy = b[4] - b[1]
+    dz = b[5] - b[2]
     if dx < 0.0:
         return 0.0
     return dx * dy + dy * dz + dz * dx
 
 
 @njit
-def _bin_range(order, start, end, bounds, cent, cmin, scale, n_bins, bin_box, bin_count):
-    """Accumulate primitives order[start:end] into per-axis bins (bin_box (3, n_bins, 6), bin_count (3, n_bins))."""
-    for i in range(start, end):
-        p = order[i]
-        for a in range(3):
-            b = int((cent[p, a] - cmin[a]) * scale[a])
-            if b >= n_bins:
-                b = n_bins - 1
-            elif b < 0:
-                b = 0
-            bin_count[a, b] += 1
-            for k in range(3):
-                if bounds[p, k] < bin_box[a, b, k]:
-                    bin_box[a, b, k] = bounds[p, k]
-                if bounds[p, 3 + k] > bin_box[a, b, 3 + k]:
-                    bin_box[a, b, 3 + k] = bounds[p, 3 + k]
+def _reset(box):
+    """Set (..., 6) boxes empty: +inf minimum, -inf maximum."""
+    box[..., :3] = np.inf
+    box[..., 3:] = -np.inf
 
 
 @njit
-def _empty_bins(n_bins):
-    box = np.empty((3, n_bins, 6))
-    box[:, :, :3] = np.inf
-    box[:, :, 3:] = -np.inf
-    return box, np.zeros((3, n_bins), np.int64)
+def _grow(dst, src):
+    for k in range(3):
+        if src[k] < dst[k]:
+            dst[k] = src[k]
+        if src[3 + k] > dst[3 + k]:
+            dst[3 + k] = src[3 + k]
+
+
+@njit
+def _bin_range(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count):
+    """Accumulate primitives order[start:end] into per-axis bins (bin_box (3, B, 6), bin_count (3, B))."""
+    n_bins = bin_count.shape[1]
+    for i in range(start, end):
+        p = order[i]
+        for a in range(3):
+            b = int((cent[p, a] - cbox[a]) * scale[a])
+            b = min(max(b, 0), n_bins - 1)
+            bin_count[a, b] += 1
+            _grow(bin_box[a, b], bounds[p])
 
 
 @njit_parallel
-def _bin_parallel(order, start, end, bounds, cent, cmin, scale, n_bins):
+def _bin_parallel(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count):
+    n_bins = bin_count.shape[1]
     boxes = np.empty((_CHUNKS, 3, n_bins, 6))
     counts = np.zeros((_CHUNKS, 3, n_bins), np.int64)
     step = (end - start + _CHUNKS - 1) // _CHUNKS
     for c in prange(_CHUNKS):
-        boxes[c, :, :, :3] = np.inf
-        boxes[c, :, :, 3:] = -np.inf
+        _reset(boxes[c])
         lo = start + c * step
         hi = min(end, lo + step)
         if lo < hi:
-            _bin_range(order, lo, hi, bounds, cent, cmin, scale, n_bins, boxes[c], counts[c])
-    box, count = _empty_bins(n_bins)
+            _bin_range(order, lo, hi, bounds, cent, cbox, scale, boxes[c], counts[c])
     for c in range(_CHUNKS):
-        count += counts[c]
         for a in range(3):
             for b in range(n_bins):
-                for k in range(3):
-                    box[a, b, k] = min(box[a, b, k], boxes[c, a, b, k])
-                    box[a, b, 3 + k] = max(box[a, b, 3 + k], boxes[c, a, b, 3 + k])
-    return box, count
+                bin_count[a, b] += counts[c, a, b]
+                _grow(bin_box[a, b], boxes[c, a, b])
 
 
 @njit
-def _best_split(bin_box, bin_count, n_bins, extent):
+def _best_split(bin_box, bin_count, cbox, right_area, acc):
     """Sweep the bins; returns (cost, axis, split bin) minimising A_L·N_L + A_R·N_R (not yet divided by A)."""
+    n_bins = bin_count.shape[1]
     best_cost = np.inf
     best_axis = -1
     best_split = 0
-    right_area = np.empty(n_bins)
-    right_count = np.empty(n_bins, np.int64)
     for a in range(3):
-        if extent[a] <= 0.0:
+        if cbox[3 + a] <= cbox[a]:
             continue
-        lo = np.array([np.inf, np.inf, np.inf])
-        hi = np.array([-np.inf, -np.inf, -np.inf])
-        n = 0
+        _reset(acc)
         for b in range(n_bins - 1, 0, -1):
-            n += bin_count[a, b]
-            for k in range(3):
-                lo[k] = min(lo[k], bin_box[a, b, k])
-                hi[k] = max(hi[k], bin_box[a, b, 3 + k])
-            right_area[b] = _area(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2])
-            right_count[b] = n
-        lo[:] = np.inf
-        hi[:] = -np.inf
-        n = 0
+            _grow(acc, bin_box[a, b])
+            right_area[b] = _half_area(acc)
+        _reset(acc)
+        n_left = 0
+        n_right = 0
+        for b in range(n_bins):
+            n_right += bin_count[a, b]
         for b in range(n_bins - 1):
-            n += bin_count[a, b]
-            for k in range(3):
-                lo[k] = min(lo[k], bin_box[a, b, k])
-                hi[k] = max(hi[k], bin_box[a, b, 3 + k])
-            if n == 0 or right_count[b + 1] == 0:
+            n_left += bin_count[a, b]
+            n_right -= bin_count[a, b]
+            _grow(acc, bin_box[a, b])
+            if n_left == 0 or n_right == 0:
                 continue
-            cost = _area(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]) * n + right_area[b + 1] * right_count[b + 1]
+            cost = _half_area(acc) * n_left + right_area[b + 1] * n_right
             if cost < best_cost:
                 best_cost, best_axis, best_split = cost, a, b + 1
     return best_cost, best_axis, best_split
 
 
 @njit
-def _node_bounds(order, start, end, bounds, cent):
-    box = np.array([np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf])
-    cmin = np.array([np.inf, np.inf, np.inf])
-    cmax = np.array([-np.inf, -np.inf, -np.inf])
-    for i in range(start, end):
+def _partition(order, start, end, cent, axis, cbox, scale, split, n_bins, left_cbox, right_cbox):
+    """Move primitives whose bin is below `split` to the front; gather both sides' centroid bounds."""
+    _reset(left_cbox)
+    _reset(right_cbox)
+    i, j = start, end - 1
+    while i <= j:
         p = order[i]
-        for k in range(3):
-            box[k] = min(box[k], bounds[p, k])
-            box[3 + k] = max(box[3 + k], bounds[p, 3 + k])
-            cmin[k] = min(cmin[k], cent[p, k])
-            cmax[k] = max(cmax[k], cent[p, k])
-    return box, cmin, cmax
+        b = int((cent[p, axis] - cbox[axis]) * scale[axis])
+        b = min(max(b, 0), n_bins - 1)
+        if b < split:
+            for k in range(3):
+                left_cbox[k] = min(left_cbox[k], cent[p, k])
+                left_cbox[3 + k] = max(left_cbox[3 + k], cent[p, k])
+            i += 1
+        else:
+            for k in range(3):
+                right_cbox[k] = min(right_cbox[k], cent[p, k])
+                right_cbox[3 + k] = max(right_cbox[3 + k], cent[p, k])
+            order[i], order[j] = order[j], p
+            j -= 1
+    return i
 
 
 @njit
-def _partition(order, start, end, cent, axis, cmin, scale, split, n_bins):
-    i, j = start, end - 1
-    while i <= j:
-        b = int((cent[order[i], axis] - cmin[axis]) * scale[axis])
-        b = min(max(b, 0), n_bins - 1)
-        if b < split:
-            i += 1
-        else:
-            order[i], order[j] = order[j], order[i]
-            j -= 1
-    return i
+def _range_bounds(order, start, end, bounds, cent, box, cbox):
+    _reset(box)
+    _reset(cbox)
+    for i in range(start, end):
+        p = order[i]
+        _grow(box, bounds[p])
+        for k in range(3):
+            cbox[k] = min(cbox[k], cent[p, k])
+            cbox[3 + k] = max(cbox[3 + k], cent[p, k])
 
 
 @njit
@@ -154,62 +156,169 @@ def _store_box(node_box, node, box):
 
 
 @njit
-def build_bvh(bounds, max_leaf, n_bins):
-    """Build a BVH over primitive boxes `bounds` float64 (n, 6) (min xyz, max xyz).
+def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order, bounds, cent, max_leaf, n_bins,
+                cost_traversal, task_size, parallel_min, node_box, node_link, tasks, n_tasks):
+    """Build the subtree of node `root` over order[start:end], allocating nodes from `first_free` upward.
 
-    Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,), depth). A leaf's primitives
-    are order[first:first + count].
+    Nodes with fewer than `task_size` primitives (when > 0) are not built but appended to `tasks` as
+    (node, start, end, depth). Returns (next free node, number of tasks, deepest level reached).
+    """
+    stack_i = np.empty((MAX_DEPTH + 4, 4), np.int64)
+    stack_f = np.empty((MAX_DEPTH + 4, 12))
+    bin_box = np.empty((3, n_bins, 6))
+    bin_count = np.zeros((3, n_bins), np.int64)
+    right_area = np.empty(n_bins)
+    acc = np.empty(6)
+    scale = np.empty(3)
+    left_box = np.empty(6)
+    right_box = np.empty(6)
+    box = np.empty(6)
+    cbox = np.empty(6)
+    stack_i[0] = (root, start, end, depth)
+    stack_f[0, :6] = root_box
+    stack_f[0, 6:] = root_cbox
+    sp = 1
+    next_free = first_free
+    max_depth = depth
+    while sp > 0:
+        sp -= 1
+        node, start, end, depth = stack_i[sp, 0], stack_i[sp, 1], stack_i[sp, 2], stack_i[sp, 3]
+        box[:] = stack_f[sp, :6]
+        cbox[:] = stack_f[sp, 6:]
+        count = end - start
+        _store_box(node_box, node, box)
+        max_depth = max(max_depth, depth)
+        if 0 < task_size and count < task_size and node != root:
+            tasks[n_tasks] = (node, start, end, depth)
+            n_tasks += 1
+            continue
+        # stage 1: bin the centroids and find the cheapest split
+        axis = -1
+        split = 0
+        cost = np.inf
+        if count > 1 and depth < MAX_DEPTH:
+            for a in range(3):
+                ext = cbox[3 + a] - cbox[a]
+                scale[a] = n_bins / ext * (1.0 - 1e-9) if ext > 0.0 else 0.0
+            _reset(bin_box)
+            bin_count[:] = 0
+            if count >= parallel_min:
+                _bin_parallel(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count)
+            else:
+                _bin_range(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count)
+            cost, axis, split = _best_split(bin_box, bin_count, cbox, right_area, acc)
+        # stage 2: a leaf when splitting does not pay (SAH) or is impossible
+        area = _half_area(box)
+        split_cost = cost_traversal + (cost / area if area > 0.0 else 0.0)
+        leaf = count == 1 or depth >= MAX_DEPTH or (count <= max_leaf and (axis < 0 or count <= split_cost))
+        if leaf:
+            node_link[node, 0] = start
+            node_link[node, 1] = count
+            continue
+        # stage 3: partition; children boxes come from the bins, centroid boxes from the partition pass
+        if axis >= 0:
+            # the left child goes to stack slot sp + 1 (built first), the right to slot sp
+            mid = _partition(order, start, end, cent, axis, cbox, scale, split, n_bins, stack_f[sp + 1, 6:],
+                             stack_f[sp, 6:])
+            _reset(left_box)
+            _reset(right_box)
+            for b in range(n_bins):
+                _grow(left_box if b < split else right_box, bin_box[axis, b])
+            stack_f[sp, :6] = right_box
+            stack_f[sp + 1, :6] = left_box
+        else:
+            mid = (start + end) // 2  # all centroids coincide: halve the range
+            _range_bounds(order, mid, end, bounds, cent, right_box, acc)
+            stack_f[sp, :6] = right_box
+            stack_f[sp, 6:] = acc
+            _range_bounds(order, start, mid, bounds, cent, left_box, acc)
+            stack_f[sp + 1, :6] = left_box
+            stack_f[sp + 1, 6:] = acc
+        left = next_free
+        next_free += 2
+        node_link[node, 0] = left
+        node_link[node, 1] = 0
+        stack_i[sp] = (left + 1, mid, end, depth + 1)  # right child, built after the left
+        stack_i[sp + 1] = (left, start, mid, depth + 1)
+        sp += 2
+    return next_free, n_tasks, max_depth
+
+
+@njit_parallel
+def _build_tasks(tasks, bases, order, bounds, cent, max_leaf, n_bins, cost_traversal, node_box, node_link, ends,
+                 depths):
+    for k in prange(tasks.shape[0]):
+        node, start, end, depth = tasks[k, 0], tasks[k, 1], tasks[k, 2], tasks[k, 3]
+        box = np.empty(6)
+        cbox = np.empty(6)
+        _range_bounds(order, start, end, bounds, cent, box, cbox)
+        ends[k], _, depths[k] = _build_from(node, start, end, depth, box, cbox, bases[k], order, bounds, cent,
+                                            max_leaf, n_bins, cost_traversal, 0, 1 << 62, node_box, node_link, tasks, 0)
+
+
+@njit
+def build_bvh(bounds, max_leaf, n_bins, cost_traversal):
+    """Build a BVH over primitive boxes `bounds` float64 (n, 6) (min xyz, max xyz); n >= 1.
+
+    `cost_traversal` is the SAH cost of a traversal step relative to one primitive test; leaves hold at most
+    `max_leaf` primitives (more only where the depth limit forces it).
+
+    Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,), depth). Interior nodes link to
+    their first child (the second follows it); a leaf's primitives are order[first:first + count].
     """
     n = bounds.shape[0]
     order = np.arange(n)
     cent = (bounds[:, :3] + bounds[:, 3:]) * 0.5
-    node_box = np.empty((max(2 * n - 1, 1), 6), np.float32)
-    node_link = np.zeros((max(2 * n - 1, 1), 2), np.int32)
-    # work stack of (node, start, end, depth)
-    stack = np.empty((4 * MAX_DEPTH + 8, 4), np.int64)
-    stack[0] = (0, 0, n, 0)
-    sp = 1
-    n_nodes = 1
-    max_depth = 0
-    scale = np.empty(3)
-    while sp > 0:
-        sp -= 1
-        node, start, end, depth = stack[sp, 0], stack[sp, 1], stack[sp, 2], stack[sp, 3]
-        max_depth = max(max_depth, depth)
-        count = end - start
-        box, cmin, cmax = _node_bounds(order, start, end, bounds, cent)
-        _store_box(node_box, node, box)
-        extent = cmax - cmin
-        split_axis = -1
-        split = 0
-        if count > 1 and depth < MAX_DEPTH:
-            for a in range(3):
-                scale[a] = n_bins / extent[a] * (1.0 - 1e-9) if extent[a] > 0.0 else 0.0
-            if count >= PARALLEL_MIN:
-                bin_box, bin_count = _bin_parallel(order, start, end, bounds, cent, cmin, scale, n_bins)
-            else:
-                bin_box, bin_count = _empty_bins(n_bins)
-                _bin_range(order, start, end, bounds, cent, cmin, scale, n_bins, bin_box, bin_count)
-            cost, split_axis, split = _best_split(bin_box, bin_count, n_bins, extent)
-            area = _area(box[0], box[1], box[2], box[3], box[4], box[5])
-            split_cost = COST_TRAVERSAL + (cost / area if area > 0.0 else 0.0)
-            if count <= max_leaf and (split_axis < 0 or count <= split_cost):
-                split_axis = -2  # a leaf is cheaper
-        if split_axis == -2 or count == 1 or (split_axis == -1 and count <= max_leaf) or depth >= MAX_DEPTH:
-            node_link[node, 0] = start
-            node_link[node, 1] = count
-            continue
-        if split_axis >= 0:
-            mid = _partition(order, start, end, cent, split_axis, cmin, scale, split, n_bins)
-        else:
-            mid = (start + end) // 2  # all centroids coincide: split the range in half
-        if mid == start or mid == end:
-            mid = (start + end) // 2
-        left = n_nodes
-        n_nodes += 2
-        node_link[node, 0] = left
-        node_link[node, 1] = 0
-        stack[sp] = (left + 1, mid, end, depth + 1)
-        stack[sp + 1] = (left, start, mid, depth + 1)
-        sp += 2
-    return node_box[:n_nodes].copy(), node_link[:n_nodes].copy(), order, max_depth
+    capacity = 2 * n + 2
+    node_box = np.empty((capacity, 6), np.float32)
+    node_link = np.zeros((capacity, 2), np.int32)
+    box = np.empty(6)
+    cbox = np.empty(6)
+    _range_bounds(order, 0, n, bounds, cent, box, cbox)
+    # the top of the tree, sequentially; small subtrees become tasks
+    task_size = max(1024, n // 64)
+    # big nodes (>= task_size) number at most (2n/task_size)·MAX_DEPTH; each yields at most two tasks
+    tasks = np.empty((2 * (2 * (n // task_size) + 2) * (MAX_DEPTH + 1), 4), np.int64)
+    # node 1 is padding: sibling pairs then start at even indices, so a pair of 32-byte nodes fills one cache line
+    node_box[1] = 0.0
+    top_end, n_tasks, depth = _build_from(0, 0, n, 0, box, cbox, 2, order, bounds, cent, max_leaf, n_bins,
+                                          cost_traversal, task_size if n >= 4 * task_size else 0, PARALLEL_MIN, node_box,
+                                          node_link, tasks, 0)
+    if n_tasks == 0:
+        return node_box[:top_end].copy(), node_link[:top_end].copy(), order, depth
+    # the subtrees, in parallel, each into its own region of the node arrays
+    tasks = tasks[:n_tasks]
+    bases = np.empty(n_tasks, np.int64)
+    base = top_end
+    for k in range(n_tasks):
+        bases[k] = base
+        base += 2 * (tasks[k, 2] - tasks[k, 1])
+    big_box = np.empty((base, 6), np.float32)
+    big_link = np.zeros((base, 2), np.int32)
+    big_box[:top_end] = node_box[:top_end]
+    big_link[:top_end] = node_link[:top_end]
+    ends = np.empty(n_tasks, np.int64)
+    depths = np.empty(n_tasks, np.int64)
+    _build_tasks(tasks, bases, order, bounds, cent, max_leaf, n_bins, cost_traversal, big_box, big_link, ends, depths)
+    # compact: close the gaps between regions, shifting child links that point into a region
+    shift = np.zeros(n_tasks, np.int64)
+    total = top_end
+    for k in range(n_tasks):
+        shift[k] = bases[k] - total
+        total += ends[k] - bases[k]
+        depth = max(depth, depths[k])
+    out_box = np.empty((total, 6), np.float32)
+    out_link = np.empty((total, 2), np.int32)
+    out_box[:top_end] = big_box[:top_end]
+    out_link[:top_end] = big_link[:top_end]
+    for k in range(n_tasks):
+        root = tasks[k, 0]
+        if big_link[root, 1] == 0:
+            out_link[root, 0] = big_link[root, 0] - shift[k]
+        lo, hi = bases[k], ends[k]
+        for i in range(lo, hi):
+            j = i - shift[k]
+            out_box[j] = big_box[i]
+            out_link[j, 1] = big_link[i, 1]
+            out_link[j, 0] = big_link[i, 0] - shift[k] if big_link[i, 1] == 0 else big_link[i, 0]
+    return out_box, out_link, order, depth

@@ -113,7 +113,7 @@ def phong(n, L, V, mat, Id, Is, w):
         return 0.0, 0.0, 0.0
     R = madd(mul(L, -1.0), n, 2.0 * n_dot_l)
     r_dot_v = dot(R, V)
-    spec = max(r_dot_v, 0.0) ** mat[MAT_SHININESS]
+    spec = r_dot_v ** mat[MAT_SHININESS] if r_dot_v > 0.0 else 0.0  # no highlight where R·V <= 0, even for n = 0
     return (
         (mat[MAT_KD] * Id[0] * n_dot_l + mat[MAT_KS] * Is[0] * spec) * w,
         (mat[MAT_KD + 1] * Id[1] * n_dot_l + mat[MAT_KS + 1] * Is[1] * spec) * w,
@@ -122,10 +122,10 @@ def phong(n, L, V, mat, Id, Is, w):
 
 
 @njit
-def illuminate(sa, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
+def illuminate(sa, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
     """The classic model at point p with unit shading normal n (facing the viewer) and unit V towards the eye.
 
-    Returns ((r, g, b), shadow rays traced). Random numbers for area-light samples come from
+    `geo` is `traverse.geometry_of(sa)`, for shadow rays. Returns ((r, g, b), shadow rays traced). Random numbers for area-light samples come from
     (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on nothing else.
     """
     mat = sa.materials[mat_id]
@@ -151,7 +151,7 @@ def illuminate(sa, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
             if shadows:
                 rays += 1
                 origin = madd(p, n, config.RAY_EPSILON * max(1.0, abs(p[0]), abs(p[1]), abs(p[2])))
-                if any_hit(sa, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack):
+                if any_hit(geo, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack):
                     continue
             cr, cg, cb = phong(n, L, V, mat, Id, Is, w * inv_n)
             r += cr

@@ -9,7 +9,9 @@ in object space is the world-space t. Each shape test returns `(t, part)`, where
 
 import math
 
-from .jit import njit, njit_contract
+import numpy as np
+
+from .jit import njit
 from .layout import (
     SHAPE_BOX,
     SHAPE_CONE,
@@ -22,6 +24,7 @@ from .layout import (
 from .vec import xform_point, xform_vector
 
 NO_HIT = -1.0
+f64 = np.float64
 
 # ------------------------------------------------------------------------------------------------ triangles
 
@@ -93,31 +96,41 @@ def intersect_triangle(o, setup, v, i, t_max):
 # ------------------------------------------------------------------------------------------------ boxes (BVH)
 
 
+#: 1 + 2·γ(3) for float64 (γ(n) = n·u / (1 − n·u), u = 2^-53): scaling t_far by it makes the slab test
+#: conservative (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2)).
+_ROBUST_FAR = 1.0 + 2.0 * (3.0 * 2.0**-53) / (1.0 - 3.0 * 2.0**-53)
+
+
 @njit
 def box_setup(o, d):
-    """Per-ray constants of the slab test: 1/d (zero components replaced by a huge finite value, so the test
-    never meets 0·inf), origin·(1/d), and which box columns hold the near and far plane on each axis."""
+    """Per-ray constants of the slab test: the origin, 1/d (zero components replaced by a huge finite value, so
+    the test never meets 0·inf), and which box columns hold the near and far plane on each axis."""
     ix = 1.0 / d[0] if d[0] != 0.0 else 1e100
     iy = 1.0 / d[1] if d[1] != 0.0 else 1e100
     iz = 1.0 / d[2] if d[2] != 0.0 else 1e100
     nx = 0 if ix >= 0.0 else 3
     ny = 1 if iy >= 0.0 else 4
     nz = 2 if iz >= 0.0 else 5
-    return ix, iy, iz, o[0] * ix, o[1] * iy, o[2] * iz, nx, ny, nz, 3 - nx, 5 - ny, 7 - nz
+    return ix, iy, iz, o[0], o[1], o[2], nx, ny, nz, 3 - nx, 5 - ny, 7 - nz
 
 
-@njit_contract
+@njit
 def intersect_node_box(box, j, rb, t_max):
-    """Slab test of the ray (constants `rb` from `box_setup`) against box j of `box` (float32 (n, 6)).
+    """Slab test of the ray (constants `rb` from `box_setup`) against box j of `box` (float32 (n, >= 6)).
 
-    Returns the entry distance (clamped to 0), or -1 if the box is missed or lies beyond t_max. The builder
-    widens float32 bounds outward, so the test is conservative. (Only contraction is allowed here: the box
-    test tolerates rounding, the triangle test does not.)
+    Returns the entry distance (clamped to 0), or -1 if the box is missed or lies beyond t_max. Each slab
+    distance is (plane − origin)·(1/d), whose relative rounding error is bounded, and t_far is scaled by
+    1 + 2γ(3), so a ray that touches the box is never reported as missing it — not even along an edge that
+    lies exactly on a box face (which watertight meshes depend on).
     """
     ix, iy, iz, ox, oy, oz, nx, ny, nz, fx, fy, fz = rb
-    t_near = max(max(box[j, nx] * ix - ox, box[j, ny] * iy - oy), max(box[j, nz] * iz - oz, 0.0))
-    t_far = min(min(box[j, fx] * ix - ox, box[j, fy] * iy - oy), min(box[j, fz] * iz - oz, t_max))
-    if t_near <= t_far:
+    # np.float64(): promote the float32 bounds before any arithmetic, compiled or interpreted (NumPy keeps
+    # float32 · float in float32 under NEP 50, and the 1e100 stand-in for 1/0 would overflow)
+    t_near = max(max((f64(box[j, nx]) - ox) * ix, (f64(box[j, ny]) - oy) * iy),
+                 max((f64(box[j, nz]) - oz) * iz, 0.0))
+    t_far = min(min((f64(box[j, fx]) - ox) * ix, (f64(box[j, fy]) - oy) * iy),
+                (f64(box[j, fz]) - oz) * iz) * _ROBUST_FAR
+    if t_near <= min(t_far, t_max):
         return t_near
     return NO_HIT
 
@@ -128,8 +141,14 @@ def intersect_node_box(box, j, rb, t_max):
 @njit
 def _quadratic_roots(a, half_b, c):
     """Roots of a·t² + 2·half_b·t + c = 0, smaller first, in the numerically stable form. (nan, nan) if none."""
+    if a == 0.0:
+        # linear: a ray parallel to a cone's generator meets the (double) cone once
+        if half_b == 0.0:
+            return math.nan, math.nan
+        t = -c / (2.0 * half_b)
+        return t, t
     disc = half_b * half_b - a * c
-    if disc < 0.0 or a == 0.0:
+    if disc < 0.0:
         return math.nan, math.nan
     s = math.sqrt(disc)
     q = -(half_b + s) if half_b >= 0.0 else -(half_b - s)

@@ -4,12 +4,44 @@ No `fastmath`: the watertight triangle test relies on exact IEEE products (FMA c
 antisymmetry of shared-edge tests), and "no hit yet" comparisons must not be folded away.
 """
 
+import hashlib
+import os
+from pathlib import Path
+
 import numba
+
+
+def _drop_stale_cache() -> None:
+    """Numba keys a cached function on the timestamp of its own source file only, so a kernel inlined from a
+    file that has since changed would load stale (and possibly out-of-layout) code. Keep a digest of every
+    lumos source file next to the cache and wipe lumos's cache entries when it changes."""
+    package = Path(__file__).resolve().parent.parent
+    digest = hashlib.sha1()
+    for path in sorted(package.rglob("*.py")):
+        stat = path.stat()
+        digest.update(f"{path.relative_to(package)}:{stat.st_mtime_ns}:{stat.st_size};".encode())
+    roots = [package] if not numba.config.CACHE_DIR else [Path(numba.config.CACHE_DIR)]
+    stamp = roots[0] / ".lumos-sources"
+    try:
+        if stamp.exists() and stamp.read_text() == digest.hexdigest():
+            return
+        # under NUMBA_CACHE_DIR, numba names each source folder's cache "<folder name>_<hash of its path>"
+        folders = {package.name} | {p.name for p in package.rglob("*") if p.is_dir()}
+        for root in roots:
+            for entry in root.rglob("*.nb[ic]"):
+                if root == package or entry.parent.name.rsplit("_", 1)[0] in folders:
+                    entry.unlink(missing_ok=True)
+        stamp.parent.mkdir(parents=True, exist_ok=True)
+        stamp.write_text(digest.hexdigest())
+    except OSError:
+        pass  # a read-only install: numba falls back to its own checks
+
+
+if os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0"):
+    _drop_stale_cache()
 
 #: Device-style helpers: inlined into their callers by LLVM, cached on disk.
 njit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: Top-level kernels run with prange over rows or tiles.
 njit_parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 prange = numba.prange
-#: For tests that tolerate rounding (ray–box slabs): allow fused multiply-add and ignore the sign of zero.
-njit_contract = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract", "nsz"})

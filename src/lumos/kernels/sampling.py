@@ -12,7 +12,10 @@ def stratified_2d(s, n, r1, r2):
     m = int(math.sqrt(n) + 0.5)
     if m * m == n:
         return ((s % m) + r1) / m, ((s // m) + r2) / m
-    return (s + r1) / n, (((s * 7919) % n) + r2) / n
+    # s -> s·k mod n is a permutation only when k and n are coprime: k = 7919 (prime) unless n is a multiple of
+    # it, then the prime 7907 (no n up to 7919·7907 is a multiple of both)
+    k = 7919 if n % 7919 != 0 else 7907
+    return (s + r1) / n, (((s * k) % n) + r2) / n
 
 
 @njit

@@ -6,6 +6,8 @@ Normals of analytic shapes come from their canonical form and are carried to wor
 
 import math
 
+import numpy as np
+
 from .jit import njit
 from .layout import (
     FLAG_NORMALS,
@@ -68,7 +70,9 @@ def surface_at(sa, o, d, t, ref, b1, b2, part):
     p = madd(o, d, t)
     if ref >= 0:
         v = sa.tri_verts
-        v0 = (float(v[ref, 0]), float(v[ref, 1]), float(v[ref, 2]))
+        # np.float64, not float(): Numba's float() keeps a float32 a float32, and the edges and normal would be
+        # computed in single precision
+        v0 = (np.float64(v[ref, 0]), np.float64(v[ref, 1]), np.float64(v[ref, 2]))
         e1 = (v[ref, 3] - v0[0], v[ref, 4] - v0[1], v[ref, 5] - v0[2])
         e2 = (v[ref, 6] - v0[0], v[ref, 7] - v0[1], v[ref, 8] - v0[2])
         n_geo = normalize(cross(e1, e2))

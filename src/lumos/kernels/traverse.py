@@ -7,18 +7,24 @@ Unbounded shapes (planes) are tested before the tree.
 
 from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
 from .jit import njit
-from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND
+from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST, Geometry
 
 
 @njit
-def _shape_hit(sa, s, o, d, t_min, t_max):
-    info = sa.shape_info[s]
-    return intersect_shape(info[INFO_KIND], info[INFO_FLAGS] & FLAG_CAPPED, sa.shape_xform[s], o, d, t_min, t_max)
+def geometry_of(sa):
+    """The `Geometry` view of a `SceneArrays` (no copies: the same arrays)."""
+    return Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info, sa.unbounded)
 
 
 @njit
-def closest_hit(sa, o, d, t_min, t_max, stack, stack_t):
-    """Nearest intersection with t_min < t < t_max.
+def _shape_hit(geo, s, o, d, t_min, t_max):
+    info = geo.shape_info[s]
+    return intersect_shape(info[INFO_KIND], info[INFO_FLAGS] & FLAG_CAPPED, geo.shape_xform[s], o, d, t_min, t_max)
+
+
+@njit
+def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
+    """Nearest intersection with t_min < t < t_max; `geo` is a `layout.Geometry`.
 
     Returns (t, ref, b1, b2, part): ref is a triangle index (>= 0) or ~shape index (< 0); b1, b2 are the
     barycentrics of a triangle hit, part the face of a shape hit. t = -1 when nothing is hit.
@@ -29,13 +35,13 @@ def closest_hit(sa, o, d, t_min, t_max, stack, stack_t):
     best_b2 = 0.0
     best_part = 0
     hit = False
-    for k in range(sa.unbounded.shape[0]):
-        s = sa.unbounded[k]
-        t, part = _shape_hit(sa, s, o, d, t_min, best_t)
+    for k in range(geo.unbounded.shape[0]):
+        s = geo.unbounded[k]
+        t, part = _shape_hit(geo, s, o, d, t_min, best_t)
         if t != NO_HIT:
             best_t, best_ref, best_part, hit = t, ~s, part, True
-    box = sa.node_box
-    link = sa.node_link
+    box = geo.node_box
+    link = geo.node_link
     if box.shape[0] > 0:
         rb = box_setup(o, d)
         setup = triangle_setup(d)
@@ -43,23 +49,23 @@ def closest_hit(sa, o, d, t_min, t_max, stack, stack_t):
         sp = 0
         active = intersect_node_box(box, 0, rb, best_t) != NO_HIT
         while active:
-            count = link[node, 1]
+            count = link[node, NODE_COUNT]
             if count > 0:
                 # leaf: test its primitives
-                first = link[node, 0]
+                first = link[node, NODE_FIRST]
                 for k in range(first, first + count):
-                    r = sa.prim_ref[k]
+                    r = geo.prim_ref[k]
                     if r >= 0:
-                        t, b1, b2 = intersect_triangle(o, setup, sa.tri_verts, r, best_t)
+                        t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, best_t)
                         if t > t_min:
                             best_t, best_ref, best_b1, best_b2, hit = t, r, b1, b2, True
                     else:
-                        t, part = _shape_hit(sa, ~r, o, d, t_min, best_t)
+                        t, part = _shape_hit(geo, ~r, o, d, t_min, best_t)
                         if t != NO_HIT:
                             best_t, best_ref, best_part, hit = t, r, part, True
             else:
                 # interior: visit the nearer child, push the farther
-                c = link[node, 0]
+                c = link[node, NODE_FIRST]
                 t_left = intersect_node_box(box, c, rb, best_t)
                 t_right = intersect_node_box(box, c + 1, rb, best_t)
                 if t_left != NO_HIT and t_right != NO_HIT:
@@ -91,14 +97,14 @@ def closest_hit(sa, o, d, t_min, t_max, stack, stack_t):
 
 
 @njit
-def any_hit(sa, o, d, t_min, t_max, stack):
+def any_hit(geo, o, d, t_min, t_max, stack):
     """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
-    for k in range(sa.unbounded.shape[0]):
-        t, part = _shape_hit(sa, sa.unbounded[k], o, d, t_min, t_max)
+    for k in range(geo.unbounded.shape[0]):
+        t, part = _shape_hit(geo, geo.unbounded[k], o, d, t_min, t_max)
         if t != NO_HIT:
             return True
-    box = sa.node_box
-    link = sa.node_link
+    box = geo.node_box
+    link = geo.node_link
     if box.shape[0] == 0:
         return False
     rb = box_setup(o, d)
@@ -108,21 +114,21 @@ def any_hit(sa, o, d, t_min, t_max, stack):
     node = 0
     sp = 0
     while True:
-        count = link[node, 1]
+        count = link[node, NODE_COUNT]
         if count > 0:
-            first = link[node, 0]
+            first = link[node, NODE_FIRST]
             for k in range(first, first + count):
-                r = sa.prim_ref[k]
+                r = geo.prim_ref[k]
                 if r >= 0:
-                    t, b1, b2 = intersect_triangle(o, setup, sa.tri_verts, r, t_max)
+                    t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)
                     if t > t_min:
                         return True
                 else:
-                    t, part = _shape_hit(sa, ~r, o, d, t_min, t_max)
+                    t, part = _shape_hit(geo, ~r, o, d, t_min, t_max)
                     if t != NO_HIT:
                         return True
         else:
-            c = link[node, 0]
+            c = link[node, NODE_FIRST]
             hit_left = intersect_node_box(box, c, rb, t_max) != NO_HIT
             hit_right = intersect_node_box(box, c + 1, rb, t_max) != NO_HIT
             if hit_left and hit_right:
