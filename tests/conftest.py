@@ -1,0 +1,115 @@
+"""Shared fixtures for the kernel tests: compile a scene dict, trace arrays of rays, a seeded NumPy generator.
+
+Scenes stay small: a handful of objects, or a few hundred triangles for the BVH tests. Kernels are Numba
+dispatchers; every call here passes the same argument types (float64 arrays and tuples, Python ints), so each
+kernel is compiled once and then loaded from NUMBA_CACHE_DIR.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+import lumos
+from lumos.compile import compile_scene
+from lumos.kernels import layout as L
+
+
+def compile_dict(scene: dict):
+    """`CompiledScene` of a scene dict (load + validate + flatten + BVH)."""
+    return compile_scene(lumos.load_scene(scene))
+
+
+def trace(arrays, origins, directions, t_max=1e30):
+    """Closest hits of rays through `kernels.batch.trace_closest`: (t (n,), -1 on a miss; ref (n,); b (n, 2))."""
+    from lumos.kernels.batch import trace_closest
+
+    o = np.ascontiguousarray(np.atleast_2d(origins), dtype=np.float64)
+    d = np.ascontiguousarray(np.atleast_2d(directions), dtype=np.float64)
+    n = len(o)
+    t = np.empty(n)
+    ref = np.empty(n, np.int64)
+    b = np.empty((n, 2))
+    trace_closest(arrays, o, d, float(t_max), t, ref, b)
+    return t, ref, b
+
+
+def trace_any(arrays, origins, directions, t_max):
+    from lumos.kernels.batch import trace_any as _trace_any
+
+    o = np.ascontiguousarray(np.atleast_2d(origins), dtype=np.float64)
+    d = np.ascontiguousarray(np.atleast_2d(directions), dtype=np.float64)
+    hit = np.zeros(len(o), bool)
+    _trace_any(arrays, o, d, np.ascontiguousarray(t_max, dtype=np.float64), hit)
+    return hit
+
+
+def _params(kernel) -> tuple[str, ...]:
+    """Parameter names of a kernel (a Numba dispatcher, or the plain function when the JIT is off)."""
+    return tuple(inspect.signature(getattr(kernel, "py_func", kernel)).parameters)
+
+
+def geometry(arrays):
+    """What `closest_hit` / `any_hit` take: `traverse.geometry_of(arrays)` where the kernels define it (the
+    traversal-only view of `SceneArrays`), else the `SceneArrays` itself."""
+    from lumos.kernels import traverse
+
+    return traverse.geometry_of(arrays) if hasattr(traverse, "geometry_of") else arrays
+
+
+def call_illuminate(arrays, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
+    """`illuminate(...)`, passing the traversal view as well when its signature asks for one."""
+    from lumos.kernels.illumination import illuminate
+
+    if "geo" in _params(illuminate):
+        return illuminate(arrays, geometry(arrays), p, n, V, mat_id, seed, pixel, sample, shadows, stack)
+    return illuminate(arrays, p, n, V, mat_id, seed, pixel, sample, shadows, stack)
+
+
+def surfaces(arrays, origins, directions):
+    """Per ray: the kernels' closest hit (`traverse.closest_hit`) and the surface there (`surface.surface_at`).
+
+    Returns a list of None (miss) or dicts with t, ref, part, p, n_geo, n_sh, u, v, material, object, light.
+    """
+    from lumos.kernels.surface import surface_at
+    from lumos.kernels.traverse import closest_hit
+
+    stack = np.empty(64, np.int64)
+    stack_t = np.empty(64)
+    geo = geometry(arrays)
+    out = []
+    for o, d in zip(np.atleast_2d(origins), np.atleast_2d(directions)):
+        o = tuple(float(x) for x in o)
+        d = tuple(float(x) for x in d)
+        t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, 1e30, stack, stack_t)
+        if t < 0.0:
+            out.append(None)
+            continue
+        p, n_geo, n_sh, u, v, mat, obj, light = surface_at(arrays, o, d, t, ref, b1, b2, part)
+        out.append(dict(t=t, ref=int(ref), part=int(part), p=np.array(p), n_geo=np.array(n_geo),
+                        n_sh=np.array(n_sh), u=u, v=v, material=int(mat), object=int(obj), light=int(light)))
+    return out
+
+
+def material_row(ka=0.0, kd=0.0, ks=0.0, shininess=1.0) -> np.ndarray:
+    """One row of `SceneArrays.materials` (float64 (MAT_SIZE,)), for calling `phong` directly."""
+    row = np.zeros(L.MAT_SIZE)
+    row[L.MAT_KA : L.MAT_KA + 3] = ka
+    row[L.MAT_KD : L.MAT_KD + 3] = kd
+    row[L.MAT_KS : L.MAT_KS + 3] = ks
+    row[L.MAT_SHININESS] = shininess
+    row[L.MAT_IOR] = 1.0
+    return row
+
+
+def render(scene: dict, **settings):
+    """`lumos.render(scene, method="raycast", ...)`."""
+    settings.setdefault("method", "raycast")
+    return lumos.render(scene, **settings)
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(20240607)

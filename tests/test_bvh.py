@@ -1,0 +1,251 @@
+"""BVH build and traversal: `trace_closest` / `trace_any` against brute force over every primitive, and the
+structure invariants of the built tree (every primitive in exactly one leaf, nested boxes, bounded depth)."""
+
+import numpy as np
+import pytest
+from conftest import compile_dict, trace, trace_any
+from naive import hit_object, hit_triangle, shape_bounds
+
+from lumos.kernels import layout as L
+
+MAT = {"kd": 0.5}
+
+
+def _f32(x):
+    """Values exactly representable in float32 (the precision the compile step stores triangles in)."""
+    return np.asarray(x, dtype=np.float32).astype(np.float64)
+
+
+def random_scene(rng, n_tri=300, n_each=8):
+    """A mesh of random triangles, random spheres/boxes/cylinders/cones/disks and one plane, inside [-5, 5]^3."""
+    centers = rng.uniform(-4.5, 4.5, (n_tri, 1, 3))
+    tris = _f32(centers + rng.normal(scale=0.35, size=(n_tri, 3, 3)))
+    objects = [{"type": "mesh", "vertices": tris.reshape(-1, 3).tolist(),
+                "faces": np.arange(3 * n_tri).reshape(-1, 3).tolist(), "material": MAT}]
+    for _ in range(2 * n_each):
+        objects.append({"type": "sphere", "center": rng.uniform(-4, 4, 3).tolist(),
+                        "radius": float(rng.uniform(0.1, 0.6)), "material": MAT})
+    for _ in range(n_each):
+        lo = rng.uniform(-4.5, 4, 3)
+        objects.append({"type": "box", "min": lo.tolist(), "max": (lo + rng.uniform(0.05, 1.0, 3)).tolist(),
+                        "material": MAT})
+    for kind in ("cylinder", "cone"):
+        for i in range(n_each):
+            base = rng.uniform(-4, 4, 3)
+            objects.append({"type": kind, "base": base.tolist(), "top": (base + rng.normal(scale=0.6, size=3)).tolist(),
+                            "radius": float(rng.uniform(0.1, 0.5)), "capped": bool(i % 2), "material": MAT})
+    for _ in range(n_each):
+        objects.append({"type": "disk", "center": rng.uniform(-4, 4, 3).tolist(), "normal": rng.normal(size=3).tolist(),
+                        "radius": float(rng.uniform(0.1, 0.7)), "material": MAT})
+    objects.append({"type": "plane", "point": [0.0, -4.8, 0.0], "normal": [0.05, 1.0, -0.02], "material": MAT})
+    return {"objects": objects}, tris
+
+
+def random_rays(rng, n, tris):
+    o = rng.uniform(-6.0, 6.0, (n, 3))  # many origins lie inside the scene (some inside closed shapes)
+    d = rng.normal(size=(n, 3))
+    aim = np.arange(n) % 3 == 0  # a third aimed at triangle centroids, to make triangle hits common
+    d[aim] = tris[rng.integers(len(tris), size=aim.sum())].mean(axis=1) - o[aim]
+    axial = np.arange(n) % 7 == 1  # some rays with exact zero components (the slab test's 1/0 case)
+    d[axial] = np.eye(3)[rng.integers(3, size=axial.sum())] * rng.choice([-1.0, 1.0], size=(axial.sum(), 1))
+    planar = np.arange(n) % 7 == 2
+    d[planar, rng.integers(3)] = 0.0
+    return o, d
+
+
+def brute_force(scene, tris, o, d):
+    """t of every primitive for every ray, (n_prims, n_rays), and the primitive keys: ('tri', k) or ('obj', i)."""
+    rows, keys = [], []
+    for k, v in enumerate(tris):
+        rows.append(hit_triangle(o, d, v[0], v[1], v[2])[0])
+        keys.append(("tri", k))
+    for i, obj in enumerate(scene["objects"]):
+        if obj["type"] != "mesh":
+            rows.append(hit_object(obj, o, d)[0])
+            keys.append(("obj", i))
+    return np.array(rows), keys
+
+
+def kernel_keys(arrays, refs, tris):
+    """Map the kernels' refs (triangle index in leaf order, or ~shape) back to brute-force keys."""
+    by_bytes = {_f32(v).astype(np.float32).tobytes(): k for k, v in enumerate(tris.reshape(len(tris), 9))}
+    out = []
+    for r in refs:
+        if r >= 0:
+            out.append(("tri", by_bytes[np.asarray(arrays.tri_verts[r], dtype=np.float32).tobytes()]))
+        else:
+            out.append(("obj", int(arrays.shape_info[~r, L.INFO_OBJECT])))
+    return out
+
+
+@pytest.fixture(scope="module")
+def mixed(request):
+    rng = np.random.default_rng(7)
+    scene, tris = random_scene(rng)
+    compiled = compile_dict(scene)
+    o, d = random_rays(rng, 3000, tris)
+    t_all, keys = brute_force(scene, tris, o, d)
+    return scene, tris, compiled, o, d, t_all, keys
+
+
+def test_closest_hit_equals_brute_force(mixed):
+    scene, tris, compiled, o, d, t_all, keys = mixed
+    t_k, ref_k, _ = trace(compiled.arrays, o, d)
+    order = np.argsort(t_all, axis=0)
+    best = np.take_along_axis(t_all, order[:1], axis=0)[0]
+    second = np.take_along_axis(t_all, order[1:2], axis=0)[0]
+    hit = np.isfinite(best)
+    assert 0.3 < hit.mean() < 0.95
+    assert np.array_equal(t_k >= 0.0, hit), np.flatnonzero((t_k >= 0.0) != hit)
+    np.testing.assert_allclose(t_k[hit], best[hit], rtol=1e-9)
+    # the same primitive wherever the nearest hit is not a near-tie
+    with np.errstate(invalid="ignore"):
+        unambiguous = hit & (second - best > 1e-7 * best)
+    got = kernel_keys(compiled.arrays, ref_k[unambiguous], tris)
+    want = [keys[i] for i in order[0][unambiguous]]
+    assert got == want
+    # every kind of primitive was the answer for some ray
+    kinds = {k[0] if k[0] == "tri" else scene["objects"][k[1]]["type"] for k in want}
+    assert kinds == {"tri", "sphere", "box", "cylinder", "cone", "disk", "plane"}
+
+
+def test_any_hit_equals_brute_force(mixed, rng):
+    _, _, compiled, o, d, t_all, _ = mixed
+    best = t_all.min(axis=0)
+    t_max = np.where(np.isfinite(best), best * rng.uniform(0.3, 1.7, len(best)), rng.uniform(1.0, 50.0, len(best)))
+    clear = ~(np.abs(best - t_max) <= 1e-9 * t_max)
+    got = trace_any(compiled.arrays, o, d, t_max)
+    want = best < t_max
+    assert 0.2 < want.mean() < 0.8
+    assert np.array_equal(got[clear], want[clear])
+
+
+def test_closest_hit_respects_t_max(mixed):
+    _, _, compiled, o, d, t_all, _ = mixed
+    best = t_all.min(axis=0)
+    t_k, _, _ = trace(compiled.arrays, o, d, t_max=3.0)
+    sure = np.abs(best - 3.0) > 1e-9
+    np.testing.assert_array_equal((t_k >= 0)[sure], (best < 3.0)[sure])
+
+
+# ------------------------------------------------------------------------------------------ tree structure
+
+
+def tree(arrays):
+    """(bounds float64 (nn, 6), first (nn,), count (nn,)) whichever node layout `kernels.layout` uses."""
+    boxes = np.asarray(arrays.node_box)[:, :6].astype(np.float64)
+    link = np.asarray(arrays.node_link)
+    first = link[:, getattr(L, "NODE_FIRST", 0)].astype(np.int64)
+    count = link[:, getattr(L, "NODE_COUNT", 1)].astype(np.int64)
+    return boxes, first, count
+
+
+def check_tree(compiled, prim_boxes):
+    """Walk the tree from the root and assert every invariant; returns the depth found."""
+    arrays = compiled.arrays
+    boxes, first, count = tree(arrays)
+    n_prims = len(arrays.prim_ref)
+    seen_nodes = np.zeros(len(boxes), int)
+    seen_slots = np.zeros(n_prims, int)
+    max_depth = 0
+    stack = [(0, 0)]
+    while stack:
+        node, depth = stack.pop()
+        seen_nodes[node] += 1
+        max_depth = max(max_depth, depth)
+        if count[node] > 0:
+            lo, hi = first[node], first[node] + count[node]
+            assert 0 <= lo and hi <= n_prims
+            seen_slots[lo:hi] += 1
+            for r in arrays.prim_ref[lo:hi]:
+                pb = prim_boxes[int(r)]
+                assert (boxes[node, :3] <= pb[:3]).all() and (pb[3:] <= boxes[node, 3:]).all(), (node, r)
+        else:
+            c = first[node]
+            assert 0 < c and c + 1 < len(boxes)
+            for child in (c, c + 1):
+                assert (boxes[node, :3] <= boxes[child, :3]).all() and (boxes[child, 3:] <= boxes[node, 3:]).all()
+                stack.append((child, depth + 1))
+    # a tree: no node reached twice (unreached slots are allowed: the builder may pad for alignment)
+    assert seen_nodes[0] == 1 and seen_nodes.max() == 1
+    assert (seen_slots == 1).all()  # leaves partition prim_ref
+    # prim_ref holds every triangle and every bounded shape exactly once
+    refs = arrays.prim_ref.astype(np.int64)
+    assert sorted(refs[refs >= 0]) == list(range(len(arrays.tri_verts)))
+    bounded = [s for s in range(len(arrays.shape_info)) if arrays.shape_info[s, L.INFO_KIND] != L.SHAPE_PLANE]
+    assert sorted(~refs[refs < 0]) == bounded
+    assert max_depth <= 60 and compiled.bvh_depth <= 60
+    return max_depth
+
+
+def _prim_boxes(scene, arrays):
+    """Tight bounds per prim_ref value: triangles from their stored vertices, shapes from the object's own
+    parameters (not the compile step's corner bounds)."""
+    out = {}
+    for r in arrays.prim_ref:
+        r = int(r)
+        if r >= 0:
+            v = np.asarray(arrays.tri_verts[r], dtype=np.float64).reshape(3, 3)
+            out[r] = np.concatenate([v.min(axis=0), v.max(axis=0)])
+        else:
+            out[r] = shape_bounds(scene["objects"][int(arrays.shape_info[~r, L.INFO_OBJECT])])
+    return out
+
+
+def test_tree_invariants_mixed_scene(mixed):
+    scene, _, compiled, *_ = mixed
+    depth = check_tree(compiled, _prim_boxes(scene, compiled.arrays))
+    assert depth >= 5  # a real tree, not one leaf
+
+
+def test_tree_invariants_and_traversal_on_degenerate_inputs(rng):
+    # 40 identical spheres (all centroids equal: no SAH split exists) + exponentially spaced tiny triangles
+    # (binning puts nearly all of them in the first bin, level after level)
+    spheres = [{"type": "sphere", "center": [1.0, 2.0, 3.0], "radius": 0.5, "material": MAT} for _ in range(40)]
+    n = 200
+    xs = _f32(1.5 ** np.arange(n))  # up to 1e35: still finite in float32
+    v = np.zeros((n, 3, 3))
+    v[:, 0, 0], v[:, 1, 0], v[:, 2, 0] = xs, xs * 1.05, xs
+    v[:, 1, 1], v[:, 2, 2] = 0.05 * xs, 0.05 * xs
+    tris = _f32(v)
+    mesh = {"type": "mesh", "vertices": tris.reshape(-1, 3).tolist(), "faces": np.arange(3 * n).reshape(-1, 3).tolist(),
+            "material": MAT}
+    scene = {"objects": spheres + [mesh]}
+    compiled = compile_dict(scene)
+    assert check_tree(compiled, _prim_boxes(scene, compiled.arrays)) >= 30  # a deep, lopsided tree
+    # rays aimed at each triangle's centroid from the side its normal (1, -1, 0) points to, and at the spheres
+    target = tris.mean(axis=1)
+    o = target + xs[:, None] * np.array([0.3, -0.5, 0.2])
+    d = target - o
+    t_k, _, _ = trace(compiled.arrays, o, d)
+    t_all, _ = brute_force(scene, tris, o, d)
+    assert np.isfinite(t_all.min(axis=0)).all()
+    np.testing.assert_allclose(t_k, t_all.min(axis=0), rtol=1e-9)
+    t_k, ref, _ = trace(compiled.arrays, [[1.0, 2.0, 10.0]], [[0.0, 0.0, -1.0]])
+    assert t_k[0] == pytest.approx(6.5) and ref[0] < 0
+
+
+@pytest.mark.nojit
+def test_single_primitive_and_plane_only_scenes():
+    one = compile_dict({"objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1.0, "material": MAT}]})
+    check_tree(one, {-1: np.array([-1.0, -1, -1, 1, 1, 1])})
+    t, ref, _ = trace(one.arrays, [[0.0, 0.0, 3.0], [2.0, 0.0, 3.0]], [[0.0, 0.0, -1.0]] * 2)
+    assert t[0] == 2.0 and ref[0] == -1 and t[1] == -1.0
+    plane = compile_dict({"objects": [{"type": "plane", "point": [0, -1, 0], "normal": [0, 1, 0], "material": MAT}]})
+    assert len(plane.arrays.prim_ref) == 0
+    t, ref, _ = trace(plane.arrays, [[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]], [[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
+    assert t[0] == 2.0 and ref[0] == -1 and t[1] == -1.0
+    assert list(trace_any(plane.arrays, [[0.0, 1.0, 0.0]] * 2, [[0.0, -1.0, 0.0]] * 2, [2.5, 1.5])) == [True, False]
+
+
+@pytest.mark.nojit
+def test_axis_aligned_rays_through_bvh():
+    # regression (interpreted kernels): a float32 bound times the 1e100 standing in for 1/0 stayed float32 under
+    # NumPy (NEP 50), overflowed to inf and culled every node for rays with a zero direction component
+    scene = {"objects": [{"type": "sphere", "center": [1.0, 1.5, 2.0], "radius": 0.5, "material": MAT},
+                         {"type": "box", "min": [3.0, 0.25, 0.5], "max": [4.0, 1.0, 1.5], "material": MAT}]}
+    arrays = compile_dict(scene).arrays
+    o = [[1.0, 1.5, 9.0], [1.0, -4.0, 2.0], [-3.0, 1.5, 2.0], [3.5, 0.5, 9.0], [9.0, 0.5, 1.0]]
+    d = [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]]
+    t, _, _ = trace(arrays, o, d)
+    np.testing.assert_array_equal(t, [6.5, 5.0, 3.5, 7.5, 5.0])
