@@ -61,7 +61,8 @@ def main():
                               "render": {"width": args.size, "height": args.size},
                               "objects": [{"type": "mesh", "vertices": vertices, "faces": faces,
                                            "material": {"kd": 0.8}}]})
-    compiled = compile_scene(scene)
+    compile_scene(lumos.load_scene({"objects": [{"type": "mesh", "vertices": vertices[:3], "faces": faces[:1]}]}))
+    compiled = compile_scene(scene)  # the builder is warm: this times the build, not the JIT
     sa = compiled.arrays
     t_out, ref_out, b_out = np.empty(n), np.empty(n, np.int64), np.empty((n, 2))
     trace_closest(sa, o[:1024], d[:1024], 1e30, t_out[:1024], ref_out[:1024], b_out[:1024])

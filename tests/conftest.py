@@ -7,7 +7,6 @@ kernel is compiled once and then loaded from NUMBA_CACHE_DIR.
 
 from __future__ import annotations
 
-import inspect
 
 import numpy as np
 import pytest
@@ -46,26 +45,19 @@ def trace_any(arrays, origins, directions, t_max):
     return hit
 
 
-def _params(kernel) -> tuple[str, ...]:
-    """Parameter names of a kernel (a Numba dispatcher, or the plain function when the JIT is off)."""
-    return tuple(inspect.signature(getattr(kernel, "py_func", kernel)).parameters)
-
-
 def geometry(arrays):
-    """What `closest_hit` / `any_hit` take: `traverse.geometry_of(arrays)` where the kernels define it (the
-    traversal-only view of `SceneArrays`), else the `SceneArrays` itself."""
-    from lumos.kernels import traverse
+    """What `closest_hit` / `any_hit` take: the traversal view of `SceneArrays`."""
+    from lumos.kernels.views import geometry_of
 
-    return traverse.geometry_of(arrays) if hasattr(traverse, "geometry_of") else arrays
+    return geometry_of(arrays)
 
 
 def call_illuminate(arrays, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
-    """`illuminate(...)`, passing the traversal view as well when its signature asks for one."""
+    """`illuminate(...)` on the lighting and traversal views of `arrays`."""
     from lumos.kernels.illumination import illuminate
+    from lumos.kernels.views import lighting_of
 
-    if "geo" in _params(illuminate):
-        return illuminate(arrays, geometry(arrays), p, n, V, mat_id, seed, pixel, sample, shadows, stack)
-    return illuminate(arrays, p, n, V, mat_id, seed, pixel, sample, shadows, stack)
+    return illuminate(lighting_of(arrays), geometry(arrays), p, n, V, mat_id, seed, pixel, sample, shadows, stack)
 
 
 def surfaces(arrays, origins, directions):
@@ -75,10 +67,12 @@ def surfaces(arrays, origins, directions):
     """
     from lumos.kernels.surface import surface_at
     from lumos.kernels.traverse import closest_hit
+    from lumos.kernels.views import surfaces_of
 
     stack = np.empty(64, np.int64)
     stack_t = np.empty(64)
     geo = geometry(arrays)
+    surf = surfaces_of(arrays)
     out = []
     for o, d in zip(np.atleast_2d(origins), np.atleast_2d(directions)):
         o = tuple(float(x) for x in o)
@@ -87,7 +81,7 @@ def surfaces(arrays, origins, directions):
         if t < 0.0:
             out.append(None)
             continue
-        p, n_geo, n_sh, u, v, mat, obj, light = surface_at(arrays, o, d, t, ref, b1, b2, part)
+        p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part)
         out.append(dict(t=t, ref=int(ref), part=int(part), p=np.array(p), n_geo=np.array(n_geo),
                         n_sh=np.array(n_sh), u=u, v=v, material=int(mat), object=int(obj), light=int(light)))
     return out

@@ -13,6 +13,7 @@ from conftest import compile_dict
 from naive import chi2_uniform, unit
 
 from lumos.kernels.illumination import sample_light
+from lumos.kernels.views import lighting_of
 from lumos.kernels.sampling import concentric_disk, stratified_2d
 
 P_MIN = 1e-3  # significance level of every χ² test here (the seeds are fixed, so the outcome is too)
@@ -75,7 +76,7 @@ def test_stratified_non_square_is_a_latin_hypercube(n, rng):
 def _light_samples(scene, p, u):
     arrays = compile_dict(scene).arrays
     p = tuple(float(x) for x in p)
-    out = [sample_light(arrays, 0, p, float(a), float(b)) for a, b in u]
+    out = [sample_light(lighting_of(arrays), 0, p, float(a), float(b)) for a, b in u]
     L = np.array([s[0] for s in out])
     dist = np.array([s[1] for s in out])
     w = np.array([s[2] for s in out])

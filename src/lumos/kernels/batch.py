@@ -4,7 +4,8 @@ import numpy as np
 
 from .. import config
 from .jit import njit_parallel, prange
-from .traverse import any_hit, closest_hit, geometry_of
+from .traverse import any_hit, closest_hit
+from .views import geometry_of
 
 _CHUNK = 256
 

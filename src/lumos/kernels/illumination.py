@@ -48,7 +48,7 @@ DIM_LIGHTS = 16
 
 
 @njit
-def sample_light(sa, j, p, u1, u2):
+def sample_light(lit, j, p, u1, u2):
     """One sample of light j seen from point p.
 
     Returns (L, dist, w) with L the unit direction to the light, dist the distance to the sampled point (a large
@@ -56,9 +56,9 @@ def sample_light(sa, j, p, u1, u2):
     (1/att for point lights, 1 for directional, the equivalent-intensity factor for area lights; 0 if the
     sample cannot light p).
     """
-    kind = sa.light_kind[j]
-    vecs = sa.light_vecs[j]
-    sc = sa.light_scalars[j]
+    kind = lit.light_kind[j]
+    vecs = lit.light_vecs[j]
+    sc = lit.light_scalars[j]
     if kind == LIGHT_DIRECTIONAL:
         return mul(row3(vecs, LV_DIRECTION), -1.0), config.T_FAR, 1.0
     if kind == LIGHT_POINT:
@@ -122,30 +122,30 @@ def phong(n, L, V, mat, Id, Is, w):
 
 
 @njit
-def illuminate(sa, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
+def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
     """The classic model at point p with unit shading normal n (facing the viewer) and unit V towards the eye.
 
-    `geo` is `traverse.geometry_of(sa)`, for shadow rays. Returns ((r, g, b), shadow rays traced). Random numbers for area-light samples come from
+    `lit` is a `layout.Lighting`; `geo` a `layout.Geometry`, for shadow rays. Returns ((r, g, b), shadow rays traced). Random numbers for area-light samples come from
     (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on nothing else.
     """
-    mat = sa.materials[mat_id]
-    amb = sa.ambient
+    mat = lit.materials[mat_id]
+    amb = lit.ambient
     r = mat[MAT_KA] * amb[0]
     g = mat[MAT_KA + 1] * amb[1]
     b = mat[MAT_KA + 2] * amb[2]
     rays = 0
     dim = DIM_LIGHTS
-    for j in range(sa.light_kind.shape[0]):
-        Id = row3(sa.light_vecs[j], LV_DIFFUSE)
-        Is = row3(sa.light_vecs[j], LV_SPECULAR)
-        n_samples = sa.light_samples[j]
+    for j in range(lit.light_kind.shape[0]):
+        Id = row3(lit.light_vecs[j], LV_DIFFUSE)
+        Is = row3(lit.light_vecs[j], LV_SPECULAR)
+        n_samples = lit.light_samples[j]
         inv_n = 1.0 / n_samples
         for s in range(n_samples):
             u1, u2 = 0.5, 0.5
-            if sa.light_kind[j] > LIGHT_DIRECTIONAL:
+            if lit.light_kind[j] > LIGHT_DIRECTIONAL:
                 u1, u2 = stratified_2d(s, n_samples, rand01(seed, pixel, sample, dim), rand01(seed, pixel, sample, dim + 1))
                 dim += 2
-            L, dist, w = sample_light(sa, j, p, u1, u2)
+            L, dist, w = sample_light(lit, j, p, u1, u2)
             if w == 0.0 or dot(n, L) <= 0.0:
                 continue
             if shadows:

@@ -96,10 +96,18 @@ SceneArrays = namedtuple(
     ],
 )
 
-#: What traversal needs, and nothing else. Numba passes a namedtuple of arrays by value (and reference-counts
-#: its members) at every call that is not inlined: with all 17 arrays of SceneArrays that cost more than the
-#: traversal itself (measured: 150 ns per missed ray, against 40 ns with 7 arrays). Kernels build this once per
-#: call with `kernels.traverse.geometry_of(sa)` and hand it to closest_hit / any_hit.
+# Views: small namedtuples over the same arrays, one per stage. Numba passes a namedtuple of arrays by value (and
+# reference-counts its members) at every call that is not inlined; with all 17 arrays of SceneArrays that cost
+# more than the work itself (measured: 150 ns per missed ray, against 40 ns with 7 arrays). Kernels build the
+# views once per row or chunk (`kernels.views`) and hand each stage only its own.
+
+#: What traversal needs (closest_hit, any_hit).
 Geometry = namedtuple(
     "Geometry", ["node_box", "node_link", "prim_ref", "tri_verts", "shape_xform", "shape_info", "unbounded"]
+)
+#: What turns a hit into a surface (surface_at).
+Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_info", "shape_xform", "shape_info"])
+#: What the illumination model reads (illuminate, sample_light).
+Lighting = namedtuple(
+    "Lighting", ["materials", "ambient", "light_kind", "light_samples", "light_vecs", "light_scalars"]
 )

@@ -62,14 +62,15 @@ def _canonical_normal_uv(kind, part, p):
 
 
 @njit
-def surface_at(sa, o, d, t, ref, b1, b2, part):
-    """Returns (p, n_geometric, n_shading, u, v, material_id, object_id, light_id) for a hit.
+def surface_at(surf, o, d, t, ref, b1, b2, part):
+    """Returns (p, n_geometric, n_shading, u, v, material_id, object_id, light_id) for a hit (`surf` is a
+    `layout.Surfaces`).
 
     Normals are unit length and not yet turned towards the viewer (see `face_forward`).
     """
     p = madd(o, d, t)
     if ref >= 0:
-        v = sa.tri_verts
+        v = surf.tri_verts
         # np.float64, not float(): Numba's float() keeps a float32 a float32, and the edges and normal would be
         # computed in single precision
         v0 = (np.float64(v[ref, 0]), np.float64(v[ref, 1]), np.float64(v[ref, 2]))
@@ -77,10 +78,10 @@ def surface_at(sa, o, d, t, ref, b1, b2, part):
         e2 = (v[ref, 6] - v0[0], v[ref, 7] - v0[1], v[ref, 8] - v0[2])
         n_geo = normalize(cross(e1, e2))
         b0 = 1.0 - b1 - b2
-        info = sa.tri_info[ref]
+        info = surf.tri_info[ref]
         n_sh = n_geo
         if info[INFO_FLAGS] & FLAG_NORMALS:
-            nn = sa.tri_normals
+            nn = surf.tri_normals
             n_sh = normalize((b0 * nn[ref, 0] + b1 * nn[ref, 3] + b2 * nn[ref, 6],
                               b0 * nn[ref, 1] + b1 * nn[ref, 4] + b2 * nn[ref, 7],
                               b0 * nn[ref, 2] + b1 * nn[ref, 5] + b2 * nn[ref, 8]))
@@ -88,13 +89,13 @@ def surface_at(sa, o, d, t, ref, b1, b2, part):
                 n_sh = n_geo
         u, w = b1, b2
         if info[INFO_FLAGS] & FLAG_UVS:
-            uv = sa.tri_uvs
+            uv = surf.tri_uvs
             u = b0 * uv[ref, 0] + b1 * uv[ref, 2] + b2 * uv[ref, 4]
             w = b0 * uv[ref, 1] + b1 * uv[ref, 3] + b2 * uv[ref, 5]
         return p, n_geo, n_sh, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]
     s = ~ref
-    info = sa.shape_info[s]
-    m = sa.shape_xform[s]
+    info = surf.shape_info[s]
+    m = surf.shape_xform[s]
     n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], part, xform_point(m, p))
     n = normalize(xform_normal(m, n_obj))
     return p, n, n, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]

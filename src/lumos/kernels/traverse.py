@@ -7,13 +7,8 @@ Unbounded shapes (planes) are tested before the tree.
 
 from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
 from .jit import njit
-from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST, Geometry
-
-
-@njit
-def geometry_of(sa):
-    """The `Geometry` view of a `SceneArrays` (no copies: the same arrays)."""
-    return Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info, sa.unbounded)
+from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST
+from .views import geometry_of  # noqa: F401  (re-exported: callers build the view next to the traversal)
 
 
 @njit

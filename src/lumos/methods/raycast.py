@@ -17,26 +17,27 @@ from ..kernels.illumination import illuminate
 from ..kernels.jit import njit, njit_parallel, prange
 from ..kernels.layout import LIGHT_SPHERE, MAT_EMISSION, MAT_KD
 from ..kernels.surface import surface_at
-from ..kernels.traverse import closest_hit, geometry_of
+from ..kernels.traverse import closest_hit
+from ..kernels.views import geometry_of, lighting_of, surfaces_of
 from ..kernels.vec import dot, mul
 from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
 
 
 @njit
-def shade_hit(sa, geo, o, d, hit, seed, pixel, sample, shadows, stack):
+def shade_hit(surf, lit, geo, o, d, hit, seed, pixel, sample, shadows, stack):
     """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays)."""
     t, ref, b1, b2, part = hit
-    p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(sa, o, d, t, ref, b1, b2, part)
-    mat = sa.materials[mat_id]
+    p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part)
+    mat = lit.materials[mat_id]
     V = mul(d, -1.0)
     # emitted light: two-sided for emissive materials, one-sided for rect and disk area lights
     emit = 1.0
-    if light_id >= 0 and sa.light_kind[light_id] != LIGHT_SPHERE and dot(n_geo, V) < 0.0:
+    if light_id >= 0 and lit.light_kind[light_id] != LIGHT_SPHERE and dot(n_geo, V) < 0.0:
         emit = 0.0
     # the shading normal faces the viewer (DESIGN.md §3)
     if dot(n_sh, V) < 0.0:
         n_sh = mul(n_sh, -1.0)
-    (r, g, b), rays = illuminate(sa, geo, p, n_sh, V, mat_id, seed, pixel, sample, shadows, stack)
+    (r, g, b), rays = illuminate(lit, geo, p, n_sh, V, mat_id, seed, pixel, sample, shadows, stack)
     rgb = (r + emit * mat[MAT_EMISSION], g + emit * mat[MAT_EMISSION + 1], b + emit * mat[MAT_EMISSION + 2])
     kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
     return rgb, n_sh, kd, object_id, rays
@@ -46,7 +47,8 @@ def shade_hit(sa, geo, o, d, hit, seed, pixel, sample, shadows, stack):
 def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                   radiance, depth, normal, albedo, object_id, rays_per_row):
     for y in prange(y0, y1):
-        geo = geometry_of(sa)  # per task: parfor bodies cannot capture a namedtuple built outside them
+        # per row: parfor bodies cannot capture a namedtuple built outside them
+        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
         stack = np.empty(config.BVH_STACK, np.int64)
         stack_t = np.empty(config.BVH_STACK)
         rays = 0
@@ -63,7 +65,7 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                     g += sa.background[1]
                     b += sa.background[2]
                     continue
-                rgb, n_sh, kd, obj, extra = shade_hit(sa, geo, o, d, hit, seed, pixel, s, False, stack)
+                rgb, n_sh, kd, obj, extra = shade_hit(surf, lit, geo, o, d, hit, seed, pixel, s, False, stack)
                 rays += extra
                 r += rgb[0]
                 g += rgb[1]

@@ -1,0 +1,19 @@
+"""Per-stage views of `SceneArrays` (see `layout`): the same arrays, regrouped so each call passes only its own."""
+
+from .jit import njit
+from .layout import Geometry, Lighting, Surfaces
+
+
+@njit
+def geometry_of(sa):
+    return Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info, sa.unbounded)
+
+
+@njit
+def surfaces_of(sa):
+    return Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info)
+
+
+@njit
+def lighting_of(sa):
+    return Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars)
