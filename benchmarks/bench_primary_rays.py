@@ -61,7 +61,7 @@ def main():
                               "render": {"width": args.size, "height": args.size},
                               "objects": [{"type": "mesh", "vertices": vertices, "faces": faces,
                                            "material": {"kd": 0.8}}]})
-    compile_scene(lumos.load_scene({"objects": [{"type": "mesh", "vertices": vertices[:3], "faces": faces[:1]}]}))
+    compile_scene(lumos.load_scene({"objects": [{"type": "triangle", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]}]}))
     compiled = compile_scene(scene)  # the builder is warm: this times the build, not the JIT
     sa = compiled.arrays
     t_out, ref_out, b_out = np.empty(n), np.empty(n, np.int64), np.empty((n, 2))
