@@ -12,10 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import config
 from ..kernels import layout as L
 from .bvh import build, pack_nodes
-from .shapes import canonical, rect_canonical, world_bounds
+from .shapes import canonical, frame, rect_canonical, world_bounds
 
 
 @dataclass
@@ -127,8 +126,6 @@ def _lights(scene, materials: _Materials, shapes: _Shapes, first_light_object: i
             shapes.add(L.SHAPE_RECT, m, mat, first_light_object + i, light=i)
         elif light.shape == "disk":
             kind[i] = L.LIGHT_DISK
-            from .shapes import frame
-
             f = frame(light.normal)
             vecs[i, L.LV_POSITION] = light.center
             vecs[i, L.LV_DIRECTION] = f[:, 2]

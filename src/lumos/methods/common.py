@@ -45,14 +45,28 @@ def row_bands(height: int, bands: int = 48):
     return [(y0, min(height, y0 + step)) for y0 in range(0, height, step)]
 
 
-def check_memory(width: int, height: int, bytes_per_pixel: int = 64) -> None:
-    """Refuse images whose buffers would not fit in memory, before allocating anything."""
+def _available_memory() -> int | None:
+    """Bytes the system can give without swapping (MemAvailable counts reclaimable cache; free pages do not)."""
     import os
 
-    need = width * height * bytes_per_pixel
     try:
-        avail = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES")
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES")
     except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_memory(width: int, height: int, bytes_per_pixel: int = 64) -> None:
+    """Refuse images whose buffers would not fit in memory, before allocating anything."""
+    need = width * height * bytes_per_pixel
+    avail = _available_memory()
+    if avail is None:
         return
     if need > 0.8 * avail:
         raise LumosError(
