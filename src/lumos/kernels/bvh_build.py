@@ -19,6 +19,9 @@ MAX_DEPTH = 60
 #: Nodes with at least this many primitives bin in parallel chunks.
 PARALLEL_MIN = 1 << 16
 _CHUNKS = 16
+# Integer arguments go through np.int64: Numba would otherwise type each constant as a literal and compile
+# _build_from once per call site (it is the largest function here: ~10 s of compile each time).
+i64 = np.int64
 
 
 @njit
@@ -253,7 +256,8 @@ def _build_tasks(tasks, bases, order, bounds, cent, max_leaf, n_bins, cost_trave
         cbox = np.empty(6)
         _range_bounds(order, start, end, bounds, cent, box, cbox)
         ends[k], _, depths[k] = _build_from(node, start, end, depth, box, cbox, bases[k], order, bounds, cent,
-                                            max_leaf, n_bins, cost_traversal, 0, 1 << 62, node_box, node_link, tasks, 0)
+                                            max_leaf, n_bins, cost_traversal, i64(0), i64(1 << 62), node_box,
+                                            node_link, tasks, i64(0))
 
 
 @njit
@@ -281,9 +285,9 @@ def build_bvh(bounds, max_leaf, n_bins, cost_traversal):
     tasks = np.empty((2 * (2 * (n // task_size) + 2) * (MAX_DEPTH + 1), 4), np.int64)
     # node 1 is padding: sibling pairs then start at even indices, so a pair of 32-byte nodes fills one cache line
     node_box[1] = 0.0
-    top_end, n_tasks, depth = _build_from(0, 0, n, 0, box, cbox, 2, order, bounds, cent, max_leaf, n_bins,
-                                          cost_traversal, task_size if n >= 4 * task_size else 0, PARALLEL_MIN, node_box,
-                                          node_link, tasks, 0)
+    top_end, n_tasks, depth = _build_from(i64(0), i64(0), i64(n), i64(0), box, cbox, i64(2), order, bounds, cent,
+                                          max_leaf, n_bins, cost_traversal, i64(task_size if n >= 4 * task_size else 0),
+                                          i64(PARALLEL_MIN), node_box, node_link, tasks, i64(0))
     if n_tasks == 0:
         return node_box[:top_end].copy(), node_link[:top_end].copy(), order, depth
     # the subtrees, in parallel, each into its own region of the node arrays

@@ -5,6 +5,8 @@ first and the farther pushed with its entry distance, so a popped node is skippe
 Unbounded shapes (planes) are tested before the tree.
 """
 
+import numpy as np
+
 from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
 from .jit import njit
 from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST
@@ -31,7 +33,7 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
     best_part = 0
     hit = False
     for k in range(geo.unbounded.shape[0]):
-        s = geo.unbounded[k]
+        s = np.int64(geo.unbounded[k])
         t, part = _shape_hit(geo, s, o, d, t_min, best_t)
         if t != NO_HIT:
             best_t, best_ref, best_part, hit = t, ~s, part, True
@@ -40,9 +42,9 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
     if box.shape[0] > 0:
         rb = box_setup(o, d)
         setup = triangle_setup(d)
-        node = 0
+        node = np.int64(0)  # int64 throughout: a literal 0 or an int32 link would each compile another variant
         sp = 0
-        active = intersect_node_box(box, 0, rb, best_t) != NO_HIT
+        active = intersect_node_box(box, node, rb, best_t) != NO_HIT
         while active:
             count = link[node, NODE_COUNT]
             if count > 0:
@@ -55,12 +57,12 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
                         if t > t_min:
                             best_t, best_ref, best_b1, best_b2, hit = t, r, b1, b2, True
                     else:
-                        t, part = _shape_hit(geo, ~r, o, d, t_min, best_t)
+                        t, part = _shape_hit(geo, np.int64(~r), o, d, t_min, best_t)
                         if t != NO_HIT:
                             best_t, best_ref, best_part, hit = t, r, part, True
             else:
                 # interior: visit the nearer child, push the farther
-                c = link[node, NODE_FIRST]
+                c = np.int64(link[node, NODE_FIRST])
                 t_left = intersect_node_box(box, c, rb, best_t)
                 t_right = intersect_node_box(box, c + 1, rb, best_t)
                 if t_left != NO_HIT and t_right != NO_HIT:
@@ -95,7 +97,7 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
 def any_hit(geo, o, d, t_min, t_max, stack):
     """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
     for k in range(geo.unbounded.shape[0]):
-        t, part = _shape_hit(geo, geo.unbounded[k], o, d, t_min, t_max)
+        t, part = _shape_hit(geo, np.int64(geo.unbounded[k]), o, d, t_min, t_max)
         if t != NO_HIT:
             return True
     box = geo.node_box
@@ -104,9 +106,9 @@ def any_hit(geo, o, d, t_min, t_max, stack):
         return False
     rb = box_setup(o, d)
     setup = triangle_setup(d)
-    if intersect_node_box(box, 0, rb, t_max) == NO_HIT:
+    node = np.int64(0)
+    if intersect_node_box(box, node, rb, t_max) == NO_HIT:
         return False
-    node = 0
     sp = 0
     while True:
         count = link[node, NODE_COUNT]
@@ -119,11 +121,11 @@ def any_hit(geo, o, d, t_min, t_max, stack):
                     if t > t_min:
                         return True
                 else:
-                    t, part = _shape_hit(geo, ~r, o, d, t_min, t_max)
+                    t, part = _shape_hit(geo, np.int64(~r), o, d, t_min, t_max)
                     if t != NO_HIT:
                         return True
         else:
-            c = link[node, NODE_FIRST]
+            c = np.int64(link[node, NODE_FIRST])
             hit_left = intersect_node_box(box, c, rb, t_max) != NO_HIT
             hit_right = intersect_node_box(box, c + 1, rb, t_max) != NO_HIT
             if hit_left and hit_right:
