@@ -8,15 +8,13 @@ from .. import config
 from ..kernels.bvh_build import build_bvh
 
 
-def build(prim_bounds: np.ndarray, max_leaf: int | None = None, cost_traversal: float | None = None):
+def build(prim_bounds: np.ndarray):
     """BVH over boxes float64 (n, 6). Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,),
     depth). An empty scene gives an empty tree."""
     if len(prim_bounds) == 0:
         return np.zeros((0, 6), np.float32), np.zeros((0, 2), np.int32), np.zeros(0, np.int64), 0
     bounds = np.ascontiguousarray(prim_bounds, dtype=np.float64)
-    max_leaf = config.BVH_MAX_LEAF if max_leaf is None else max_leaf
-    cost = config.BVH_COST_TRAVERSAL if cost_traversal is None else cost_traversal
-    return build_bvh(bounds, max_leaf, config.BVH_BINS, float(cost))
+    return build_bvh(bounds, config.BVH_MAX_LEAF, config.BVH_BINS, float(config.BVH_COST_TRAVERSAL))
 
 
 def pack_nodes(node_box: np.ndarray, node_link: np.ndarray):

@@ -125,7 +125,8 @@ def phong(n, L, V, mat, Id, Is, w):
 def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
     """The classic model at point p with unit shading normal n (facing the viewer) and unit V towards the eye.
 
-    `lit` is a `layout.Lighting`; `geo` a `layout.Geometry`, for shadow rays. Returns ((r, g, b), shadow rays traced). Random numbers for area-light samples come from
+    `lit` is a `layout.Lighting`; `geo` a `layout.Geometry`, for shadow rays. Returns ((r, g, b), shadow rays
+    traced). Random numbers for area-light samples come from
     (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on nothing else.
     """
     mat = lit.materials[mat_id]

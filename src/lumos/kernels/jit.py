@@ -25,8 +25,9 @@ def _drop_stale_cache() -> None:
     try:
         if stamp.exists() and stamp.read_text() == digest.hexdigest():
             return
-        # under NUMBA_CACHE_DIR, numba names each source folder's cache "<folder name>_<hash of its path>"
-        folders = {package.name} | {p.name for p in package.rglob("*") if p.is_dir()}
+        # under NUMBA_CACHE_DIR, numba names each source folder's cache "<folder name>_<hash of its path>";
+        # only these two folders hold compiled code (a shared cache directory keeps other projects' entries)
+        folders = {"kernels", "methods"}
         for root in roots:
             for entry in root.rglob("*.nb[ic]"):
                 if root == package or entry.parent.name.rsplit("_", 1)[0] in folders:

@@ -10,7 +10,6 @@ import numpy as np
 from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
 from .jit import njit
 from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST
-from .views import geometry_of  # noqa: F401  (re-exported: callers build the view next to the traversal)
 
 
 @njit
