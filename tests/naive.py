@@ -583,3 +583,36 @@ def sphere_irradiance(p, n, center, radius, radiance):
     to = np.asarray(center, dtype=np.float64) - np.asarray(p, dtype=np.float64)
     dist = np.linalg.norm(to)
     return math.pi * radiance * (radius / dist) ** 2 * float(np.asarray(n, dtype=np.float64) @ (to / dist))
+
+
+# ------------------------------------------------------------------------------------------- rasterization
+
+
+def inside_polygon(px, py, xs, ys):
+    """Per-pixel inside test (the twin of the scan-line rasterizer): which sample points (xs, ys) lie inside the
+    screen polygon (px, py) by the even–odd rule with the top-left convention — a point on an edge is inside
+    when the edge is a left or top one (the polygon's interior lies to its right, or below a horizontal edge).
+
+    Evaluated by crossing counts on the horizontal line through each point, with half-open y intervals; returns
+    (inside bool array, distance to the nearest edge) so that callers can ignore points on edges up to rounding.
+    """
+    xs = np.asarray(xs, dtype=np.float64)
+    ys = np.asarray(ys, dtype=np.float64)
+    crossings_left = np.zeros(xs.shape, dtype=np.int64)
+    near = np.full(xs.shape, np.inf)
+    n = len(px)
+    for k in range(n):
+        x0, y0, x1, y1 = px[k], py[k], px[(k + 1) % n], py[(k + 1) % n]
+        ex, ey = x1 - x0, y1 - y0
+        length2 = ex * ex + ey * ey
+        if length2 > 0:
+            t = np.clip(((xs - x0) * ex + (ys - y0) * ey) / length2, 0.0, 1.0)
+            near = np.minimum(near, np.hypot(xs - (x0 + t * ex), ys - (y0 + t * ey)))
+        if y0 == y1:
+            continue
+        top_x, top_y, bot_x, bot_y = (x0, y0, x1, y1) if y0 < y1 else (x1, y1, x0, y0)
+        active = (top_y <= ys) & (ys < bot_y)
+        x_cross = top_x + (ys - top_y) * (bot_x - top_x) / (bot_y - top_y)
+        # a crossing at or left of the point: the point is right of (or on) a left edge
+        crossings_left += active & (x_cross <= xs)
+    return crossings_left % 2 == 1, near

@@ -19,6 +19,7 @@ from .scene.model import RenderSettings, Scene
 #: name -> "module:function" of each method's single public entry point (imported on first use).
 METHODS: dict[str, str] = {
     "raycast": "lumos.methods.raycast:render_raycast",
+    "raster": "lumos.methods.raster:render_raster",
 }
 
 _SETTING_KEYS = tuple(RenderSettings.model_fields)
@@ -72,7 +73,7 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
         scene = load_scene(scene)
     t_load = time.perf_counter()
     cfg = resolve_settings(scene, settings)
-    compiled = compile_scene(scene)
+    compiled = compile_scene(scene, cfg)
     t_build = time.perf_counter()
     with make_progress(progress) as report:
         film = _entry_point(cfg.method)(compiled, scene.camera, cfg, progress=report)

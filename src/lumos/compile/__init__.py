@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 
 from ..kernels import layout as L
 from .bvh import build, pack_nodes
+from .raster import RasterMesh, build_raster_mesh
 from .shapes import canonical, frame, rect_canonical, world_bounds
 
 
@@ -26,6 +28,7 @@ class CompiledScene:
     n_shapes: int
     bounds: np.ndarray  # (2, 3): min and max of everything bounded (planes excluded)
     object_names: list = field(default_factory=list)
+    raster: Optional["RasterMesh"] = None  # the polygons, for method raster
 
 
 class _Materials:
@@ -92,7 +95,8 @@ def _mesh_triangles(obj, world_from_object):
     return tri_v, tri_n, tri_uv
 
 
-def _lights(scene, materials: _Materials, shapes: _Shapes, first_light_object: int):
+def _lights(scene, materials: _Materials, emitters: list):
+    """Light arrays; each area light's emitting shape is appended to `emitters` as (kind, matrix, material, light)."""
     n = len(scene.lights)
     kind = np.zeros(n, np.int32)
     samples = np.ones(n, np.int32)
@@ -123,7 +127,7 @@ def _lights(scene, materials: _Materials, shapes: _Shapes, first_light_object: i
             vecs[i, L.LV_EDGE_U] = light.edge_u
             vecs[i, L.LV_EDGE_V] = light.edge_v
             scalars[i, L.LS_AREA] = np.linalg.norm(np.cross(light.edge_u, light.edge_v))
-            shapes.add(L.SHAPE_RECT, m, mat, first_light_object + i, light=i)
+            emitters.append((L.SHAPE_RECT, m, mat, i))
         elif light.shape == "disk":
             kind[i] = L.LIGHT_DISK
             f = frame(light.normal)
@@ -136,7 +140,7 @@ def _lights(scene, materials: _Materials, shapes: _Shapes, first_light_object: i
             m = np.eye(4)
             m[:3, :3] = np.column_stack([f[:, 0] * light.radius, f[:, 1] * light.radius, f[:, 2]])
             m[:3, 3] = light.center
-            shapes.add(L.SHAPE_DISK, m, mat, first_light_object + i, light=i)
+            emitters.append((L.SHAPE_DISK, m, mat, i))
         else:
             kind[i] = L.LIGHT_SPHERE
             vecs[i, L.LV_POSITION] = light.center
@@ -145,12 +149,18 @@ def _lights(scene, materials: _Materials, shapes: _Shapes, first_light_object: i
             m = np.eye(4)
             m[:3, :3] *= light.radius
             m[:3, 3] = light.center
-            shapes.add(L.SHAPE_SPHERE, m, mat, first_light_object + i, light=i)
+            emitters.append((L.SHAPE_SPHERE, m, mat, i))
     return kind, samples, vecs, scalars
 
 
-def compile_scene(scene) -> CompiledScene:
-    """Flatten a validated `Scene` into `SceneArrays` and build its BVH."""
+def compile_scene(scene, settings=None) -> CompiledScene:
+    """Flatten a validated `Scene` into `SceneArrays` and build its BVH.
+
+    With `settings.method == "raster"` the objects are also turned into polygons (`CompiledScene.raster`), and
+    the BVH holds those same polygons (for the optional shadow rays) instead of the analytic shapes.
+    """
+    if settings is not None and settings.method == "raster":
+        return _compile_raster(scene, settings)
     materials = _Materials()
     shapes = _Shapes()
     tri_parts = []  # (verts, normals, uvs, material, object)
@@ -166,8 +176,37 @@ def compile_scene(scene) -> CompiledScene:
         m = object_from_canonical if world_from_object is None else world_from_object @ object_from_canonical
         flags = L.FLAG_CAPPED if getattr(obj, "capped", False) else 0
         shapes.add(kind, m, mat, object_id, flags)
-    light_kind, light_samples, light_vecs, light_scalars = _lights(scene, materials, shapes, len(scene.objects))
+    emitters = []
+    lights = _lights(scene, materials, emitters)
+    for kind, m, mat, i in emitters:
+        shapes.add(kind, m, mat, len(scene.objects) + i, light=i)
+    return _assemble(scene, materials, shapes, tri_parts, lights, names)
 
+
+def _compile_raster(scene, settings) -> CompiledScene:
+    materials = _Materials()
+    names = [obj.name or f"{obj.type}#{i}" for i, obj in enumerate(scene.objects)]
+    object_materials = [materials.add(scene.material_of(obj)) for obj in scene.objects]
+    emitters = []
+    lights = _lights(scene, materials, emitters)
+    mesh = build_raster_mesh(scene, settings.tessellation, object_materials, emitters)
+    tri_parts = []
+    if settings.shadows:  # shadow rays test the polygons the camera sees (area lights cast no shadows)
+        faces, prim = mesh.triangles()
+        info = mesh.prim_info[prim]
+        solid = info[:, 2] < 0
+        faces, info = faces[solid], info[solid]
+        verts = mesh.positions[faces].reshape(-1, 9)
+        for mat, obj in {(int(a), int(b)) for a, b in info[:, :2]}:
+            sel = (info[:, 0] == mat) & (info[:, 1] == obj)
+            tri_parts.append((verts[sel], None, None, mat, obj))
+    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names)
+    compiled.raster = mesh
+    return compiled
+
+
+def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledScene:
+    light_kind, light_samples, light_vecs, light_scalars = lights
     tri_verts, tri_normals, tri_uvs, tri_info = _concat_triangles(tri_parts)
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
     shape_info = np.array(shapes.infos, dtype=np.int32).reshape(-1, 5)

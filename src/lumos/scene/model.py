@@ -87,6 +87,11 @@ class RenderSettings(StrictModel):
     exposure: Positive = 1.0
     threads: Optional[Annotated[int, Field(ge=1, le=1024)]] = None
     aov: list[Literal["depth", "normal", "albedo", "object_id"]] = Field(default_factory=list)
+    # scan-line rendering (method: raster)
+    perspective_correct: bool = True
+    cull_backfaces: bool = False
+    shadows: bool = False
+    tessellation: Annotated[int, Field(ge=3, le=4096)] = 48
 
     @model_validator(mode="after")
     def _check_size(self):
@@ -288,7 +293,7 @@ class Mesh(ObjectBase):
 
     After loading, `vertices` (n, 3) float64, `faces` (m, 3) int64 and the optional per-vertex `normals`
     (n, 3) and `uvs` (n, 2) are NumPy arrays whichever way the mesh was given. Polygon faces are
-    fan-triangulated (convex polygons).
+    triangulated by ear clipping (concave ones too); `polygons` keeps them as given.
     """
 
     model_config = dict(StrictModel.model_config, arbitrary_types_allowed=True)
@@ -298,7 +303,15 @@ class Mesh(ObjectBase):
     faces: Optional[Any] = None
     normals: Optional[Any] = None
     uvs: Optional[Any] = None
+    # vertex normals when the mesh has none (raster Gouraud and Phong), and the fix-ups for interpolated shading
+    normal_weighting: Literal["angle", "area", "average"] = "angle"
+    crease_angle: Annotated[float, Field(ge=0.0, le=180.0)] = 180.0
+    subdivide: Annotated[int, Field(ge=0, le=6)] = 0
+    subdivision: Literal["loop", "midpoint"] = "loop"
+    repair_t_junctions: bool = False
+    triangulate: bool = True
     _source: Optional[Path] = PrivateAttr(default=None)
+    _polygons: Optional[list] = PrivateAttr(default=None)
 
     @field_validator("vertices", "normals", mode="after")
     @classmethod
@@ -321,14 +334,14 @@ class Mesh(ObjectBase):
             return _array(v, "faces", 3, np.int64)
         if not isinstance(v, (list, tuple)) or not v:
             raise ValueError("faces must be a non-empty list of vertex-index lists")
-        tris = []
         for i, f in enumerate(v):
             if not isinstance(f, (list, tuple)) or len(f) < 3:
                 raise ValueError(f"faces[{i}] must list at least 3 vertex indices")
             if not all(isinstance(k, int) and not isinstance(k, bool) for k in f):
                 raise ValueError(f"faces[{i}] must hold integer vertex indices")
-            tris.extend((f[0], f[j], f[j + 1]) for j in range(1, len(f) - 1))
-        return np.asarray(tris, dtype=np.int64)
+        if all(len(f) == 3 for f in v):
+            return np.asarray(v, dtype=np.int64).reshape(-1, 3)
+        return [np.asarray(f, dtype=np.int64) for f in v]  # polygons: triangulated once vertices are known
 
     @model_validator(mode="after")
     def _check(self):
@@ -341,8 +354,22 @@ class Mesh(ObjectBase):
             return self
         if self.faces is None:
             raise ValueError("vertices need faces")
+        if isinstance(self.faces, list):
+            self._polygons = self.faces
+            n = len(self.vertices)
+            for i, f in enumerate(self._polygons):
+                if f.min() < 0 or f.max() >= n:
+                    raise ValueError(f"faces[{i}] refers to a vertex that does not exist (there are {n})")
+            from ..mesh import triangulate
+
+            self.faces, _ = triangulate(self.vertices, self._polygons)
         self.check_arrays()
         return self
+
+    @property
+    def polygons(self) -> list:
+        """The faces as given: a list of index arrays (polygons of any size), or the triangles as (m, 3)."""
+        return self._polygons if self._polygons is not None else list(self.faces)
 
     def check_arrays(self) -> None:
         """Index range and per-vertex array lengths (also run after a file is loaded)."""

@@ -1,0 +1,235 @@
+"""Scene → the polygon list the scan-line renderer draws (`RasterMesh`).
+
+Every object becomes polygons in world space with a shading normal at each vertex: meshes as given (after the
+fix-ups they ask for: T-junction repair, triangulation, subdivision, vertex normals averaged from the faces
+that share a vertex), analytic shapes tessellated at `render.tessellation` segments with their exact normals,
+planes as a large patch around the camera, and area lights as emitting polygons the camera can see.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import mesh as meshops
+from ..kernels import layout as L
+from ..kernels.raster import MAX_VERTS
+from .shapes import canonical
+from .tessellate import tessellate_plane, tessellate_shape
+
+
+@dataclass
+class RasterMesh:
+    positions: np.ndarray  # float64 (nv, 3) world space
+    normals: np.ndarray  # float64 (nv, 3) unit shading normals
+    uvs: np.ndarray  # float64 (nv, 2)
+    prim_start: np.ndarray  # int64 (np + 1,): polygon p has vertices prim_index[prim_start[p]:prim_start[p + 1]]
+    prim_index: np.ndarray  # int32
+    prim_info: np.ndarray  # int32 (np, 3): material, object, area light (or -1)
+    prim_point: np.ndarray  # float64 (np, 3): where flat shading evaluates the model (the polygon's centroid)
+    prim_normal: np.ndarray  # float64 (np, 3): the polygon's unit face normal (its winding's side)
+
+    @property
+    def n_prims(self) -> int:
+        return len(self.prim_start) - 1
+
+    def triangles(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every polygon as triangles: (faces (m, 3) int64, prim of each triangle (m,) int64)."""
+        counts = np.diff(self.prim_start)
+        if np.all(counts == 3):
+            return self.prim_index.reshape(-1, 3).astype(np.int64), np.arange(self.n_prims)
+        polys = [self.prim_index[a:b] for a, b in zip(self.prim_start[:-1], self.prim_start[1:])]
+        return meshops.triangulate(self.positions, polys)
+
+
+class _Part:
+    __slots__ = ("verts", "normals", "uvs", "polys", "groups", "material", "object", "light")
+
+    def __init__(self, verts, normals, uvs, polys, groups, material, object_id, light=-1):
+        self.verts, self.normals, self.uvs = verts, normals, uvs
+        self.polys = polys  # (m, 3) int64 triangles, or a list of index arrays (polygons)
+        self.groups = groups  # triangles only: flat-shading group of each triangle
+        self.material, self.object, self.light = material, object_id, light
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v, axis=1, keepdims=True)
+    return np.divide(v, n, out=np.zeros_like(v), where=n > 0)
+
+
+def _mesh_part(obj, world_from_object, material, object_id) -> _Part:
+    if obj.type == "triangle":
+        verts = np.array(obj.vertices, dtype=np.float64)
+        polys, normals, uvs = np.array([[0, 1, 2]], np.int64), None, None
+    else:
+        verts, normals, uvs = obj.vertices, obj.normals, obj.uvs
+        polys = obj.polygons if (obj.repair_t_junctions or not obj.triangulate) else obj.faces
+    if world_from_object is not None:
+        verts = verts @ world_from_object[:3, :3].T + world_from_object[:3, 3]
+        if normals is not None:
+            normals = normals @ np.linalg.inv(world_from_object[:3, :3])  # inverse transpose, row vectors
+    fix = obj if obj.type == "mesh" else None
+    if fix is not None and fix.repair_t_junctions:
+        # the inserted vertices are existing ones, so per-vertex normals and uvs stay valid
+        polys = meshops.repair_t_junctions(verts, [np.asarray(p) for p in polys])
+    groups = None
+    if isinstance(polys, list):
+        big = [p for p in polys if len(p) >= MAX_VERTS]
+        if (fix is not None and fix.triangulate) or big or (fix is not None and fix.subdivide):
+            polys, groups = meshops.triangulate(verts, polys)
+    if fix is not None and fix.subdivide:
+        verts, polys, uvs = meshops.subdivide(verts, polys, scheme=fix.subdivision, levels=fix.subdivide, uvs=uvs)
+        normals, groups = None, None  # the new vertices need new normals; each small triangle is its own polygon
+    if normals is None:
+        weighting = fix.normal_weighting if fix is not None else "angle"
+        crease = fix.crease_angle if fix is not None else 180.0
+        if isinstance(polys, list):  # polygons drawn as polygons: normals from their triangles, shared at vertices
+            tris, _ = meshops.triangulate(verts, polys)
+            _, _, normals, _ = meshops.vertex_normals(verts, tris, weighting=weighting, crease_angle=180.0)
+        else:
+            verts, polys, normals, source = meshops.vertex_normals(verts, polys, weighting=weighting,
+                                                                   crease_angle=crease)
+            if uvs is not None:
+                uvs = uvs[source]
+    normals = _unit(np.asarray(normals, dtype=np.float64))
+    if uvs is None:
+        uvs = np.zeros((len(verts), 2))
+    if groups is None and not isinstance(polys, list):
+        groups = np.arange(len(polys))
+    return _Part(verts, normals, uvs, polys, groups, material, object_id)
+
+
+def _tess_part(t, material, object_id, light=-1) -> _Part:
+    return _Part(t.vertices, t.normals, t.uvs, t.faces, t.groups, material, object_id, light)
+
+
+def _plane_part(world_from_canonical, center, extent, segments, material, object_id) -> _Part:
+    """A plane as a square patch around `center`, 50 extents wide, its grid lines spaced quadratically so that
+    cells are small near the camera and large towards the horizon."""
+    t = tessellate_plane(world_from_canonical, center, 1.0, segments)
+    m = world_from_canonical
+    e1 = m[:3, 0] / np.linalg.norm(m[:3, 0])
+    e2 = m[:3, 1] / np.linalg.norm(m[:3, 1])
+    origin = t.vertices.mean(axis=0)
+    d = t.vertices - origin
+    a, b = d @ e1, d @ e2
+    far = 50.0 * extent
+    a, b = np.sign(a) * a * a * far, np.sign(b) * b * b * far
+    verts = origin + a[:, None] * e1 + b[:, None] * e2
+    inv = np.linalg.inv(m)
+    local = verts @ inv[:3, :3].T + inv[:3, 3]
+    return _Part(verts, t.normals, local[:, :2].copy(), t.faces, t.groups, material, object_id)
+
+
+def build_raster_mesh(scene, segments: int, object_materials: list, emitters: list) -> RasterMesh:
+    """The polygons of `scene`. `object_materials[i]` is object i's material row; `emitters` lists the area
+    lights' (shape kind, world_from_canonical, material row, light index)."""
+    cam = np.asarray(scene.camera.position, dtype=np.float64)
+    parts = []
+    analytic_points = [cam]
+    for obj in scene.objects:
+        if obj.type in ("triangle", "mesh"):
+            continue
+        if obj.type != "plane":
+            kind, m = canonical(obj)
+            w = obj.transform.to_matrix() @ m if obj.transform is not None else m
+            analytic_points.append(w[:3, 3])
+    for object_id, obj in enumerate(scene.objects):
+        mat = object_materials[object_id]
+        world_from_object = None if obj.transform is None else obj.transform.to_matrix()
+        if obj.type in ("triangle", "mesh"):
+            part = _mesh_part(obj, world_from_object, mat, object_id)
+            parts.append(part)
+            analytic_points.append(part.verts.min(axis=0))
+            analytic_points.append(part.verts.max(axis=0))
+            continue
+        kind, m = canonical(obj)
+        w = m if world_from_object is None else world_from_object @ m
+        if kind == L.SHAPE_PLANE:
+            continue  # after the extent of everything else is known
+        parts.append(_tess_part(tessellate_shape(kind, w, segments, getattr(obj, "capped", True)), mat, object_id))
+    pts = np.array(analytic_points)
+    extent = max(float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))), 1.0)
+    for object_id, obj in enumerate(scene.objects):
+        if obj.type == "plane":
+            kind, m = canonical(obj)
+            w = m if obj.transform is None else obj.transform.to_matrix() @ m
+            parts.append(_plane_part(w, cam, extent, segments, object_materials[object_id], object_id))
+    n_objects = len(scene.objects)
+    for kind, w, mat, light in emitters:
+        t = tessellate_shape(kind, w, segments, True)
+        parts.append(_tess_part(t, mat, n_objects + light, light))
+    return _assemble(parts)
+
+
+def _assemble(parts) -> RasterMesh:
+    positions, normals, uvs, starts, indices, infos, points, fnormals = [], [], [], [], [], [], [], []
+    v_off = 0
+    i_off = 0
+    for p in parts:
+        verts = np.asarray(p.verts, dtype=np.float64)
+        if isinstance(p.polys, list):
+            counts = np.array([len(q) for q in p.polys], np.int64)
+            idx = np.concatenate([np.asarray(q, np.int64) for q in p.polys]) if p.polys else np.zeros(0, np.int64)
+            # flat shading per polygon: the centroid and the Newell normal
+            pt = np.array([verts[q].mean(axis=0) for q in p.polys]).reshape(-1, 3)
+            nn = np.array([_newell(verts[q]) for q in p.polys]).reshape(-1, 3)
+        else:
+            faces = np.asarray(p.polys, np.int64).reshape(-1, 3)
+            counts = np.full(len(faces), 3, np.int64)
+            idx = faces.ravel()
+            pt, nn = _group_flat(verts, faces, np.asarray(p.groups, np.int64))
+        positions.append(verts)
+        normals.append(np.asarray(p.normals, np.float64))
+        uvs.append(np.asarray(p.uvs, np.float64))
+        starts.append(i_off + np.concatenate([[0], np.cumsum(counts)[:-1]]) if len(counts) else np.zeros(0, np.int64))
+        indices.append(idx + v_off)
+        info = np.empty((len(counts), 3), np.int32)
+        info[:] = (p.material, p.object, p.light)
+        infos.append(info)
+        points.append(pt)
+        fnormals.append(_unit(nn))
+        v_off += len(verts)
+        i_off += len(idx)
+    if not parts:
+        return RasterMesh(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(1, np.int64),
+                          np.zeros(0, np.int32), np.zeros((0, 3), np.int32), np.zeros((0, 3)), np.zeros((0, 3)))
+    prim_start = np.concatenate(starts + [np.array([i_off], np.int64)]).astype(np.int64)
+    return RasterMesh(
+        np.ascontiguousarray(np.concatenate(positions)),
+        np.ascontiguousarray(np.concatenate(normals)),
+        np.ascontiguousarray(np.concatenate(uvs)),
+        prim_start,
+        np.concatenate(indices).astype(np.int32),
+        np.ascontiguousarray(np.concatenate(infos)),
+        np.ascontiguousarray(np.concatenate(points)),
+        np.ascontiguousarray(np.concatenate(fnormals)),
+    )
+
+
+def _newell(p: np.ndarray) -> np.ndarray:
+    q = np.roll(p, -1, axis=0)
+    return np.array([
+        np.sum((p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2])),
+        np.sum((p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0])),
+        np.sum((p[:, 0] - q[:, 0]) * (p[:, 1] + q[:, 1])),
+    ])
+
+
+def _group_flat(verts, faces, groups):
+    """Per triangle: its group's area-weighted centroid and its group's normal (sum of the cross products)."""
+    v0, v1, v2 = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    cr = np.cross(v1 - v0, v2 - v0)
+    area = np.linalg.norm(cr, axis=1)
+    cen = (v0 + v1 + v2) / 3.0
+    if len(groups) and np.array_equal(groups, np.arange(len(faces))):
+        return cen, cr
+    ng = int(groups.max()) + 1 if len(groups) else 0
+    gn = np.stack([np.bincount(groups, cr[:, k], ng) for k in range(3)], axis=1)
+    ga = np.bincount(groups, area, ng)
+    gc = np.stack([np.bincount(groups, cen[:, k] * area, ng) for k in range(3)], axis=1)
+    gc = np.divide(gc, ga[:, None], out=np.zeros_like(gc), where=ga[:, None] > 0)
+    # a group of zero area keeps its own triangle's centroid
+    point = np.where(ga[groups][:, None] > 0, gc[groups], cen)
+    return point, gn[groups]

@@ -1,0 +1,376 @@
+"""Scan-line polygon rasterization with a z-buffer: the kernels of `methods.raster`.
+
+The pipeline, each stage one parallel loop over flat arrays:
+
+1. `project_vertices` — world → camera → clip space with DESIGN.md's camera (so raster and ray-cast images line
+   up pixel for pixel): clip (X, Y, W, D) with W the perspective divisor and D the depth in front of the eye,
+   and, for vertices in front of the near plane, screen (x, y) in pixels plus the depth key.
+2. `bin_prims` — each polygon clipped against the near plane (only the ones that cross it are clipped), culled
+   if it faces away (optional), and given the range of pixel rows whose sample points it may cover; prims are
+   then sorted into bands of `BAND` rows (`fill_bins`), in their original order within a band.
+3. `raster_bands` — one band per task: for every polygon of the band, the classic scan-line algorithm. An edge
+   table of its non-horizontal edges; for each scan line, the active edges (top <= y < bottom) give crossings
+   (x by direct evaluation from the edge's end points, so two polygons sharing an edge compute the same x
+   bit for bit, and depth/attributes stepped incrementally down each edge); crossings sorted by x, spans filled
+   between pairs (even–odd, so concave polygons fill correctly too), depth and attributes stepped incrementally
+   along each span. The z-buffer keeps the nearest sample; the G-buffer keeps its polygon id and attributes.
+4. Shading happens in the method (`methods.raster`): flat, Gouraud or Phong, through the one illumination model.
+
+Conventions. Pixel (c, r) is sampled at (c + jx, r + jy) — the centre (0.5, 0.5) with one sample per pixel.
+Fill rule (top-left): a sample is covered when top <= y < bottom and left <= x < right, so polygons that share
+an edge cover each sample on it exactly once. The depth key is 1/W for perspective (linear in screen space,
+larger is nearer) and −D for orthographic views. Attributes are interpolated as A/W and 1/W and divided per
+pixel (perspective-correct); with `persp` off they are interpolated linearly in screen space, as the textbook's
+scan-line algorithm does, which distorts them under perspective.
+"""
+
+import math
+
+import numpy as np
+
+from .jit import njit, njit_inline, njit_parallel, prange
+from .layout import CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
+
+#: Rows per band: the unit of parallel work in the raster pass.
+BAND = 8
+#: Most vertices a polygon may have after near-plane clipping (input polygons have at most MAX_VERTS - 1).
+MAX_VERTS = 16
+#: Rasterize into the z-buffer and G-buffer / only count how many polygons cover each sample (tests).
+MODE_DEPTH = 0
+MODE_COUNT = 1
+BIN_CHUNK = 4096
+
+
+@njit_parallel
+def project_vertices(positions, cam_vecs, cam_params, width, height, near, clip, screen):
+    """clip[i] = (X, Y, W, D); screen[i] = (x, y, key, 1/W) for vertices with D >= near (NaN-free otherwise)."""
+    ortho = cam_params[CAM_ORTHO] != 0.0
+    aspect = width / height
+    if ortho:
+        sx_scale = 1.0 / (aspect * cam_params[CAM_HALF_SIZE])
+        sy_scale = 1.0 / cam_params[CAM_HALF_SIZE]
+    else:
+        sx_scale = 1.0 / (aspect * cam_params[CAM_TAN_HALF_FOV])
+        sy_scale = 1.0 / cam_params[CAM_TAN_HALF_FOV]
+    for i in prange(positions.shape[0]):
+        rx = positions[i, 0] - cam_vecs[0, 0]
+        ry = positions[i, 1] - cam_vecs[0, 1]
+        rz = positions[i, 2] - cam_vecs[0, 2]
+        cx = rx * cam_vecs[1, 0] + ry * cam_vecs[1, 1] + rz * cam_vecs[1, 2]
+        cy = rx * cam_vecs[2, 0] + ry * cam_vecs[2, 1] + rz * cam_vecs[2, 2]
+        d = -(rx * cam_vecs[3, 0] + ry * cam_vecs[3, 1] + rz * cam_vecs[3, 2])
+        X = cx * sx_scale
+        Y = cy * sy_scale
+        W = 1.0 if ortho else d
+        clip[i, 0] = X
+        clip[i, 1] = Y
+        clip[i, 2] = W
+        clip[i, 3] = d
+        if d >= near:
+            screen[i, 0], screen[i, 1], screen[i, 2], screen[i, 3] = _to_screen(X, Y, W, d, ortho, width, height)
+        else:
+            screen[i, 0] = screen[i, 1] = screen[i, 2] = screen[i, 3] = 0.0
+
+
+@njit
+def _to_screen(X, Y, W, d, ortho, width, height):
+    inv_w = 1.0 / W
+    x = (X * inv_w + 1.0) * 0.5 * width
+    y = (1.0 - Y * inv_w) * 0.5 * height
+    key = -d if ortho else inv_w
+    return x, y, key, inv_w
+
+
+@njit
+def clip_polygon(prim, prim_start, prim_index, clip, near, ortho, width, height, px, py, src, tmp_c):
+    """Sutherland–Hodgman against the near plane (D >= near) for a polygon that crosses it, in clip space where
+    every attribute is linear. Fills px, py (pixels), tmp_c (clip-space vertices; column 4 the crossing
+    parameter t) and src (the inside and outside vertex each output vertex lies between). The crossing of an
+    edge is computed from its inside end point, whichever way the polygon runs, so neighbours agree on it.
+    Returns the output vertex count."""
+    start = prim_start[prim]
+    n = prim_start[prim + 1] - start
+    m = 0
+    for k in range(n):
+        a = prim_index[start + k]
+        b = prim_index[start + (k + 1) % n]
+        ca = clip[a, 3] - near
+        cb = clip[b, 3] - near
+        if ca >= 0.0:
+            for c in range(4):
+                tmp_c[m, c] = clip[a, c]
+            src[m, 0] = a
+            src[m, 1] = a
+            tmp_c[m, 4] = 0.0
+            m += 1
+        if (ca >= 0.0) != (cb >= 0.0):
+            i_in, i_out, c_in, c_out = (a, b, ca, cb) if ca >= 0.0 else (b, a, cb, ca)
+            t = c_in / (c_in - c_out)
+            for c in range(4):
+                tmp_c[m, c] = clip[i_in, c] + t * (clip[i_out, c] - clip[i_in, c])
+            tmp_c[m, 3] = max(tmp_c[m, 3], near)
+            if not ortho:
+                tmp_c[m, 2] = tmp_c[m, 3]
+            src[m, 0] = i_in
+            src[m, 1] = i_out
+            tmp_c[m, 4] = t
+            m += 1
+    for k in range(m):
+        x, y, _, _ = _to_screen(tmp_c[k, 0], tmp_c[k, 1], tmp_c[k, 2], tmp_c[k, 3], ortho, width, height)
+        px[k] = x
+        py[k] = y
+    return m
+
+
+@njit
+def clipped_attributes(n, src, tmp_c, attrs, ortho, persp, width, height, F):
+    """F[k] = (depth key, q, A·q) at each vertex of a clipped polygon (see clip_polygon)."""
+    K = attrs.shape[1]
+    for k in range(n):
+        _, _, key, inv_w = _to_screen(tmp_c[k, 0], tmp_c[k, 1], tmp_c[k, 2], tmp_c[k, 3], ortho, width, height)
+        q = inv_w if persp else 1.0
+        F[k, 0] = key
+        F[k, 1] = q
+        i_in = src[k, 0]
+        i_out = src[k, 1]
+        t = tmp_c[k, 4]
+        for a in range(K):
+            F[k, 2 + a] = (attrs[i_in, a] + t * (attrs[i_out, a] - attrs[i_in, a])) * q
+
+
+@njit
+def signed_area2(n, px, py):
+    """Twice the signed area of the screen polygon (pixel coordinates, y down): negative when the polygon is
+    counter-clockwise as seen by the camera, i.e. front-facing."""
+    s = 0.0
+    for k in range(n):
+        j = (k + 1) % n
+        s += px[k] * py[j] - px[j] * py[k]
+    return s
+
+
+@njit_parallel
+def bin_prims(prim_start, prim_index, clip, screen, near, ortho, cull, width, height, jy, row_lo, row_hi):
+    """Rows [row_lo, row_hi) whose sample points (y = r + jy) a polygon may cover; empty for culled ones."""
+    n_prims = prim_start.shape[0] - 1
+    for c in prange((n_prims + BIN_CHUNK - 1) // BIN_CHUNK):
+        bin_chunk(c, prim_start, prim_index, clip, screen, near, ortho, cull, width, height, jy, row_lo, row_hi)
+
+
+@njit
+def bin_chunk(c, prim_start, prim_index, clip, screen, near, ortho, cull, width, height, jy, row_lo, row_hi):
+    """Rows to scan for the polygons of one chunk (see bin_prims)."""
+    n_prims = prim_start.shape[0] - 1
+    chunk = BIN_CHUNK
+    px = np.empty(MAX_VERTS)
+    py = np.empty(MAX_VERTS)
+    src = np.empty((MAX_VERTS, 2), np.int64)
+    tmp_c = np.empty((MAX_VERTS, 5))
+    for prim in range(c * chunk, min(n_prims, (c + 1) * chunk)):
+        row_lo[prim] = 0
+        row_hi[prim] = 0
+        start = prim_start[prim]
+        n = prim_start[prim + 1] - start
+        inside = 0
+        for k in range(n):
+            v = prim_index[start + k]
+            if clip[v, 3] >= near:
+                inside += 1
+            px[k] = screen[v, 0]
+            py[k] = screen[v, 1]
+        if inside == 0:
+            continue
+        if inside < n:
+            n = clip_polygon(prim, prim_start, prim_index, clip, near, ortho, width, height, px, py, src, tmp_c)
+        if n < 3:
+            continue
+        if cull and signed_area2(n, px, py) >= 0.0:
+            continue
+        y_min = py[0]
+        y_max = py[0]
+        x_min = px[0]
+        x_max = px[0]
+        for k in range(1, n):
+            y_min = min(y_min, py[k])
+            y_max = max(y_max, py[k])
+            x_min = min(x_min, px[k])
+            x_max = max(x_max, px[k])
+        if x_max < 0.0 or x_min > width or not (y_max >= 0.0 and y_min <= height):
+            continue
+        lo = max(0.0, math.ceil(y_min - jy))
+        hi = min(float(height), math.ceil(y_max - jy))
+        if hi > lo:
+            row_lo[prim] = np.int32(lo)
+            row_hi[prim] = np.int32(hi)
+
+
+@njit
+def fill_bins(row_lo, row_hi, n_bands):
+    """Polygons sorted into bands of BAND rows (a counting sort; original order kept within each band)."""
+    counts = np.zeros(n_bands + 1, np.int64)
+    for p in range(row_lo.shape[0]):
+        if row_hi[p] > row_lo[p]:
+            for b in range(row_lo[p] // BAND, (row_hi[p] - 1) // BAND + 1):
+                counts[b + 1] += 1
+    for b in range(n_bands):
+        counts[b + 1] += counts[b]
+    prims = np.empty(counts[n_bands], np.int32)
+    fill = counts[:n_bands].copy()
+    for p in range(row_lo.shape[0]):
+        if row_hi[p] > row_lo[p]:
+            for b in range(row_lo[p] // BAND, (row_hi[p] - 1) // BAND + 1):
+                prims[fill[b]] = p
+                fill[b] += 1
+    return counts, prims
+
+
+@njit_parallel
+def raster_bands(bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
+                 width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count):
+    """The raster pass: each band of BAND rows scan-converts its polygons into the buffers. In MODE_DEPTH
+    it clears zbuf (−inf) and ids (−1) first; gbuf is written only where ids >= 0."""
+    for band in prange(bins.shape[0] - 1):
+        raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
+                    width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count)
+
+
+@njit
+def raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
+                width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count):
+    """Scan-convert every polygon binned to one band of rows, in order (the same result on any thread).
+
+    One function on purpose: Numba passes each array argument of a call as a dozen scalars and counts its
+    references atomically, which cost more than the scan conversion of a small polygon did (measured: 2.4×)."""
+    K = attrs.shape[1]
+    KF = K + 2
+    y0 = band * BAND
+    y1 = min(height, y0 + BAND)
+    px = np.empty(MAX_VERTS)
+    py = np.empty(MAX_VERTS)
+    src = np.empty((MAX_VERTS, 2), np.int64)
+    tmp_c = np.empty((MAX_VERTS, 5))
+    F = np.empty((MAX_VERTS, KF))
+    e_top = np.empty(MAX_VERTS)
+    e_bot = np.empty(MAX_VERTS)
+    e_x = np.empty(MAX_VERTS)
+    e_dx = np.empty(MAX_VERTS)
+    e_v = np.empty((MAX_VERTS, 2), np.int64)
+    e_row = np.empty(MAX_VERTS, np.int64)
+    e_F = np.empty((MAX_VERTS, KF))
+    e_dF = np.empty((MAX_VERTS, KF))
+    xs = np.empty(MAX_VERTS)
+    xF = np.empty((2, KF))
+    order = np.empty(MAX_VERTS, np.int64)
+    if mode == MODE_DEPTH:  # clear this band's rows of the buffers (here, so that clearing runs in parallel)
+        for r in range(y0, y1):
+            for c in range(width):
+                zbuf[r, c] = -np.inf
+                ids[r, c] = -1
+    for k in range(bins[band], bins[band + 1]):
+        prim = bin_prims_[k]
+        r0 = max(y0, row_lo[prim])
+        r1 = min(y1, row_hi[prim])
+        # the screen polygon (clipped against the near plane when it crosses it)
+        start = prim_start[prim]
+        n = prim_start[prim + 1] - start
+        clipped = False
+        for i in range(n):
+            v = prim_index[start + i]
+            px[i] = screen[v, 0]
+            py[i] = screen[v, 1]
+            if clip[v, 3] < near:
+                clipped = True
+        if clipped:
+            n = clip_polygon(prim, prim_start, prim_index, clip, near, ortho, width, height, px, py, src, tmp_c)
+        # the edge table: non-horizontal edges, each from its top (smaller y) end point to its bottom one
+        ne = 0
+        for i in range(n):
+            j = i + 1 if i + 1 < n else 0
+            if py[i] == py[j]:
+                continue
+            top, bot = (i, j) if py[i] < py[j] else (j, i)
+            e_top[ne] = py[top]
+            e_bot[ne] = py[bot]
+            e_x[ne] = px[top]
+            e_dx[ne] = (px[bot] - px[top]) / (py[bot] - py[top])
+            e_v[ne, 0] = top
+            e_v[ne, 1] = bot
+            e_row[ne] = -2
+            ne += 1
+        ready = False  # attributes are set up at the first covered sample (most small polygons cover none)
+        for r in range(r0, r1):
+            yc = r + jy
+            # the active edges at this scan line, their crossings sorted by x (insertion sort: two for a triangle)
+            nx = 0
+            for e in range(ne):
+                if e_top[e] <= yc < e_bot[e]:
+                    xv = e_x[e] + (yc - e_top[e]) * e_dx[e]
+                    j = nx - 1
+                    while j >= 0 and xs[j] > xv:
+                        xs[j + 1] = xs[j]
+                        order[j + 1] = order[j]
+                        j -= 1
+                    xs[j + 1] = xv
+                    order[j + 1] = e
+                    nx += 1
+            # spans between pairs of crossings (even-odd)
+            for s in range(0, nx - 1, 2):
+                xl = xs[s]
+                xr = xs[s + 1]
+                c0 = max(0, int(math.ceil(xl - jx)))
+                c1 = min(width, int(math.ceil(xr - jx)))
+                if c1 <= c0:
+                    continue
+                if mode == MODE_COUNT:
+                    for c in range(c0, c1):
+                        count[r, c] += 1
+                    continue
+                if not ready:
+                    # depth key, q and A·q at the vertices (q = 1/W, or 1 without perspective correction)...
+                    if clipped:
+                        clipped_attributes(n, src, tmp_c, attrs, ortho, persp, width, height, F)
+                    else:
+                        for i in range(n):
+                            v = prim_index[start + i]
+                            q = screen[v, 3] if persp else 1.0
+                            F[i, 0] = screen[v, 2]
+                            F[i, 1] = q
+                            for a in range(K):
+                                F[i, 2 + a] = attrs[v, a] * q
+                    # ...and their steps per scan line down each edge
+                    for e in range(ne):
+                        inv_dy = 1.0 / (e_bot[e] - e_top[e])
+                        for a in range(KF):
+                            e_dF[e, a] = (F[e_v[e, 1], a] - F[e_v[e, 0], a]) * inv_dy
+                    ready = True
+                # each edge's attributes at this scan line: one step from the last, or evaluated where it starts
+                for side in range(2):
+                    e = order[s + side]
+                    if e_row[e] == r - 1:
+                        for a in range(KF):
+                            e_F[e, a] += e_dF[e, a]
+                    elif e_row[e] != r:
+                        dy = yc - e_top[e]
+                        top = e_v[e, 0]
+                        for a in range(KF):
+                            e_F[e, a] = F[top, a] + dy * e_dF[e, a]
+                    e_row[e] = r
+                # along the span: start at the first sample, then one step per pixel
+                el = order[s]
+                er = order[s + 1]
+                inv_dx = 1.0 / (xr - xl)
+                off = c0 + jx - xl
+                for a in range(KF):
+                    d = (e_F[er, a] - e_F[el, a]) * inv_dx
+                    xF[1, a] = d
+                    xF[0, a] = e_F[el, a] + off * d
+                for c in range(c0, c1):
+                    key = xF[0, 0]
+                    if key > zbuf[r, c]:
+                        zbuf[r, c] = key
+                        ids[r, c] = prim
+                        inv_q = 1.0 / xF[0, 1]
+                        for a in range(K):
+                            gbuf[r, c, a] = xF[0, 2 + a] * inv_q
+                    for a in range(KF):
+                        xF[0, a] += xF[1, a]
