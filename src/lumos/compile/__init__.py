@@ -15,6 +15,7 @@ import numpy as np
 
 from ..kernels import layout as L
 from .bvh import build, pack_nodes
+from .meshprep import prepare_mesh
 from .raster import RasterMesh, build_raster_mesh
 from .shapes import canonical, frame, rect_canonical, world_bounds
 
@@ -77,21 +78,13 @@ class _Shapes:
 
 
 def _mesh_triangles(obj, world_from_object):
-    """World-space triangle vertices (m, 9), normals (m, 9) and uvs (m, 6) of a triangle or mesh object."""
-    if obj.type == "triangle":
-        verts, faces, normals, uvs = np.array(obj.vertices, dtype=np.float64), np.array([[0, 1, 2]]), None, None
-    else:
-        verts, faces, normals, uvs = obj.vertices, obj.faces, obj.normals, obj.uvs
-    if world_from_object is not None:
-        verts = verts @ world_from_object[:3, :3].T + world_from_object[:3, 3]
-        if normals is not None:
-            normals = normals @ np.linalg.inv(world_from_object[:3, :3])  # inverse transpose, row vectors
-    tri_v = verts[faces].reshape(-1, 9)
-    tri_n = None
-    if normals is not None:
-        n = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
-        tri_n = n[faces].reshape(-1, 9)
-    tri_uv = None if uvs is None else uvs[faces].reshape(-1, 6)
+    """World-space triangle vertices (m, 9), normals (m, 9) or None (facets) and uvs (m, 6) or None of a
+    triangle or mesh object, after the fix-ups its keys ask for."""
+    m = prepare_mesh(obj, world_from_object)
+    faces = m.polygons
+    tri_v = m.vertices[faces].reshape(-1, 9)
+    tri_n = None if m.normals is None else m.normals[faces].reshape(-1, 9)
+    tri_uv = None if m.uvs is None else m.uvs[faces].reshape(-1, 6)
     return tri_v, tri_n, tri_uv
 
 

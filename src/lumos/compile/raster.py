@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import mesh as meshops
 from ..kernels import layout as L
-from ..kernels.raster import MAX_VERTS
+from .meshprep import facet, prepare_mesh
 from .shapes import canonical
 from .tessellate import tessellate_plane, tessellate_shape
 
@@ -59,45 +59,11 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def _mesh_part(obj, world_from_object, material, object_id) -> _Part:
-    if obj.type == "triangle":
-        verts = np.array(obj.vertices, dtype=np.float64)
-        polys, normals, uvs = np.array([[0, 1, 2]], np.int64), None, None
-    else:
-        verts, normals, uvs = obj.vertices, obj.normals, obj.uvs
-        polys = obj.polygons if (obj.repair_t_junctions or not obj.triangulate) else obj.faces
-    if world_from_object is not None:
-        verts = verts @ world_from_object[:3, :3].T + world_from_object[:3, 3]
-        if normals is not None:
-            normals = normals @ np.linalg.inv(world_from_object[:3, :3])  # inverse transpose, row vectors
-    fix = obj if obj.type == "mesh" else None
-    if fix is not None and fix.repair_t_junctions:
-        # the inserted vertices are existing ones, so per-vertex normals and uvs stay valid
-        polys = meshops.repair_t_junctions(verts, [np.asarray(p) for p in polys])
-    groups = None
-    if isinstance(polys, list):
-        big = [p for p in polys if len(p) >= MAX_VERTS]
-        if (fix is not None and fix.triangulate) or big or (fix is not None and fix.subdivide):
-            polys, groups = meshops.triangulate(verts, polys)
-    if fix is not None and fix.subdivide:
-        verts, polys, uvs = meshops.subdivide(verts, polys, scheme=fix.subdivision, levels=fix.subdivide, uvs=uvs)
-        normals, groups = None, None  # the new vertices need new normals; each small triangle is its own polygon
-    if normals is None:
-        weighting = fix.normal_weighting if fix is not None else "angle"
-        crease = fix.crease_angle if fix is not None else 180.0
-        if isinstance(polys, list):  # polygons drawn as polygons: normals from their triangles, shared at vertices
-            tris, _ = meshops.triangulate(verts, polys)
-            _, _, normals, _ = meshops.vertex_normals(verts, tris, weighting=weighting, crease_angle=180.0)
-        else:
-            verts, polys, normals, source = meshops.vertex_normals(verts, polys, weighting=weighting,
-                                                                   crease_angle=crease)
-            if uvs is not None:
-                uvs = uvs[source]
-    normals = _unit(np.asarray(normals, dtype=np.float64))
-    if uvs is None:
-        uvs = np.zeros((len(verts), 2))
-    if groups is None and not isinstance(polys, list):
-        groups = np.arange(len(polys))
-    return _Part(verts, normals, uvs, polys, groups, material, object_id)
+    m = prepare_mesh(obj, world_from_object, keep_polygons=True)
+    if m.normals is None:
+        m = facet(m)
+    uvs = m.uvs if m.uvs is not None else np.zeros((len(m.vertices), 2))
+    return _Part(m.vertices, m.normals, uvs, m.polygons, m.groups, material, object_id)
 
 
 def _tess_part(t, material, object_id, light=-1) -> _Part:

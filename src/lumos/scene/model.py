@@ -303,7 +303,8 @@ class Mesh(ObjectBase):
     faces: Optional[Any] = None
     normals: Optional[Any] = None
     uvs: Optional[Any] = None
-    # vertex normals when the mesh has none (raster Gouraud and Phong), and the fix-ups for interpolated shading
+    # vertex normals when the mesh has none, and the fix-ups for interpolated shading
+    smooth: bool = True
     normal_weighting: Literal["angle", "area", "average"] = "angle"
     crease_angle: Annotated[float, Field(ge=0.0, le=180.0)] = 180.0
     subdivide: Annotated[int, Field(ge=0, le=6)] = 0
