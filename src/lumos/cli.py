@@ -3,6 +3,7 @@
     lumos render SCENE [-o OUT] [--method M] [--width W] ... [--stats FILE.json] [--quiet]
     lumos info SCENE
     lumos compare A B [--diff D.png]
+    lumos sheet SCENE [-o OUT.png] [--width W] [--height H] [--spp N] [--threads T] [--columns C] [--methods M,...]
 
 Exit codes: 0 success; 2 bad input or usage (one line `lumos: error: <message>` on stderr); 1 internal error
 (rerun with LUMOS_DEBUG=1 for the traceback); 130 interrupted.
@@ -85,6 +86,22 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("b", metavar="B", help="reference image")
     compare.add_argument("--diff", metavar="D.png", help="write a heat map of the per-pixel error")
     compare.set_defaults(run=run_compare)
+
+    sheet = commands.add_parser("sheet", help="render a scene with every method, side by side in one image",
+                                description="Render SCENE with each method (and each shading of raster) and "
+                                "write the renders as one labelled grid with their render times.")
+    sheet.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    sheet.add_argument("-o", "--output", metavar="OUT", help="sheet to write: .png or .jpg "
+                       "(default: <scene name>-sheet.png in the current folder)")
+    sheet.add_argument("--width", type=int, metavar="W", help="width of each render (default: the scene's, "
+                       "at most 640)")
+    sheet.add_argument("--height", type=int, metavar="H", help="height of each render")
+    sheet.add_argument("--spp", type=int, metavar="N", help="samples per pixel")
+    sheet.add_argument("--threads", type=int, metavar="T", help="worker threads (default: all cores)")
+    sheet.add_argument("--columns", type=int, metavar="C", help="renders per row (default: up to 4)")
+    sheet.add_argument("--methods", metavar="M,...", help="only these methods, in this order (e.g. raster,raycast)")
+    sheet.add_argument("-q", "--quiet", action="store_true", help="no progress lines and no summary")
+    sheet.set_defaults(run=run_sheet)
     return parser
 
 
@@ -140,6 +157,25 @@ def run_compare(args: argparse.Namespace, started: float) -> int:
         print(f"{key:<15} {value:.6g}{unit}")
     if args.diff:
         write_image(args.diff, metrics.diff_image(a, b), srgb=False)
+    return 0
+
+
+def run_sheet(args: argparse.Namespace, started: float) -> int:
+    from . import sheet
+    from .scene.loader import load_scene
+
+    out = sheet.check_sheet_path(args.output or Path(args.scene).stem + "-sheet.png")
+    entries = sheet.entries_for(args.methods.split(",")) if args.methods is not None else None
+    scene = load_scene(args.scene)
+    flags = ("width", "height", "spp", "threads")
+    overrides = {key: getattr(args, key) for key in flags if getattr(args, key) is not None}
+    image, cells = sheet.make_sheet(scene, entries, args.columns, progress=not args.quiet,
+                                    title=Path(args.scene).name, **overrides)
+    sheet.save_sheet(image, out)
+    if not args.quiet:
+        first, count = cells[0]["image"], f"{len(cells)} render{'s' if len(cells) > 1 else ''}"
+        print(f"lumos: sheet of {count} ({first.width}x{first.height}), {time.perf_counter() - started:.2f} s "
+              f"(compile {image.info['compile_s']:.2f} s) -> {out}", file=sys.stderr)
     return 0
 
 

@@ -1,0 +1,334 @@
+"""The comparison sheet: one scene rendered by every method (and each shading of the scan-line method), side by
+side in one labelled grid image, the figure the textbook asks readers to make.
+
+    sheet, cells = make_sheet("scene.yaml", width=320, height=240)
+    save_sheet(sheet, "sheet.png")
+    cells[1]["label"], cells[1]["render_s"], cells[1]["image"]    # 'raster · Gouraud', 0.84, <lumos.Image>
+
+Layout, in pixels (`layout` computes it; every column is `slot_w` wide, every row `cell_h + caption_h`):
+
+    MARGIN  title: the scene file name
+            info:  320x240 · 1 spp · compile 1.23 s
+    MARGIN  cell  MARGIN  cell  MARGIN  ...   (up to `columns` cells a row)
+            label          label
+            time           time
+    MARGIN  cell  ...
+
+Each cell is the render's PNG encoding (`film.to_png8`, the path `Image.save` takes), pixel for pixel. Before
+the timed renders each (method, shading) pair is rendered once at WARMUP_SIZE, so a cell's time is its render
+alone, not Numba compiling (or loading from its cache) the kernel; that warm-up is the `compile` time of the
+info line, shared by all cells.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Iterable, Optional
+
+from . import api, film
+from .errors import LumosError
+
+#: Columns of the grid unless asked otherwise.
+MAX_COLUMNS = 4
+#: Widest default cell: a scene wider than this is rendered at this width (same aspect) unless a width is given.
+MAX_CELL_WIDTH = 640
+#: Narrowest column: a smaller render sits centred in a column this wide, so its caption stays legible.
+MIN_SLOT_WIDTH = 200
+#: Space around and between cells, and inside a caption strip above its first line.
+MARGIN = 12
+CAPTION_PAD = 5
+#: Font sizes (pixels) of the title, the info line and the cell labels, and the render times.
+TITLE_SIZE, INFO_SIZE, LABEL_SIZE, TIME_SIZE = 18, 12, 14, 12
+#: Colours: white sheet, near-black text, grey secondary text, a light frame around each render.
+BACKGROUND, INK, MUTED, FRAME = (255, 255, 255), (25, 25, 25), (105, 105, 105), (205, 205, 205)
+#: Width and height of the warm-up renders (any size compiles the same kernels).
+WARMUP_SIZE = 8
+#: Shadings of the scan-line method, in the textbook's order: (caption name, `shading` setting).
+RASTER_SHADINGS = (("flat", "flat"), ("Gouraud", "gouraud"), ("Phong", "phong"))
+#: Output formats of a sheet, by extension.
+SHEET_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG"}
+
+
+# ------------------------------------------------------------------------------------------------- entries
+
+
+def default_entries() -> list[tuple[str, dict]]:
+    """The cells of a full sheet with the methods registered now: `(label, {"method": ..., "shading": ...})`.
+
+    `raster` once per shading (flat, Gouraud, Phong), then every other method of `api.METHODS` once
+    (shading None: the scene's setting, which those methods ignore).
+    """
+    entries = []
+    if "raster" in api.METHODS:
+        entries += [(f"raster · {name}", {"method": "raster", "shading": shading})
+                    for name, shading in RASTER_SHADINGS]
+    entries += [(name, {"method": name, "shading": None}) for name in api.METHODS if name != "raster"]
+    return entries
+
+
+def entries_for(methods: Iterable[str]) -> list[tuple[str, dict]]:
+    """The `default_entries` of the named methods, in the order named (`--methods raycast,raster`).
+
+    Raises LumosError for an empty list or a name that is not a registered method.
+    """
+    names = list(dict.fromkeys(name.strip() for name in methods if name.strip()))
+    if not names:
+        raise LumosError("--methods: name at least one method (available: " + ", ".join(api.METHODS) + ")")
+    for name in names:
+        if name not in api.METHODS:
+            raise LumosError(f"--methods: unknown method {name!r} (available: {', '.join(api.METHODS)})")
+    available = default_entries()
+    return [entry for name in names for entry in available if entry[1]["method"] == name]
+
+
+# ----------------------------------------------------------------------------------------------- rendering
+
+
+def make_sheet(scene, entries: Optional[list[tuple[str, dict]]] = None, columns: Optional[int] = None,
+               progress: bool = False, *, title: Optional[str] = None, warm_up: bool = True,
+               max_cell_width: Optional[int] = MAX_CELL_WIDTH, **settings):
+    """Render `scene` once per entry and compose the renders into one labelled grid.
+
+    scene:    a Scene, a scene dict or a path.
+    entries:  `(label, settings)` pairs, default `default_entries()`; those whose method is not in
+              `api.METHODS` are skipped.
+    columns:  cells per row, default min(MAX_COLUMNS, number of cells).
+    progress: True prints one line per cell on stderr (and each render's progress bar).
+    title:    the sheet's title, default the scene file's name.
+    settings: override the scene's `render:` block for every cell (width, height, spp, threads ...). Without a
+              width, a scene wider than `max_cell_width` is rendered at that width with its aspect ratio kept.
+
+    Returns `(sheet, cells)`: a `PIL.Image.Image` (RGB) and per cell a dict with label, method, shading,
+    render_s, image (the lumos `Image`) and box (x, y, width, height of the render in the sheet).
+    `sheet.info["compile_s"]` is the warm-up time.
+    """
+    from .scene.loader import load_scene
+
+    title = _title_of(scene) if title is None else title
+    scene = load_scene(scene)
+    if columns is not None and columns < 1:
+        raise LumosError(f"sheet: columns must be at least 1, got {columns}")
+    jobs = _jobs(scene, default_entries() if entries is None else entries, settings, max_cell_width)
+    configs = [api.resolve_settings(scene, job) for _, job in jobs]  # every bad value fails before any render
+    say = _say if progress else (lambda text: None)
+
+    compile_s = _warm_up(scene, [job for _, job in jobs], progress, say) if warm_up else None
+    cells = []
+    for i, (label, job) in enumerate(jobs, 1):
+        img = api.render(scene, progress=progress, **job)
+        cells.append({"label": label, "method": job["method"], "shading": job.get("shading"),
+                      "render_s": float(img.stats["render_s"]), "image": img})
+        say(f"[{i}/{len(jobs)}] {label}: {img.width}x{img.height}, {format_seconds(img.stats['render_s'])}")
+
+    cfg = configs[0]
+    same_size = all((c.width, c.height) == (cfg.width, cfg.height) for c in configs)
+    info = [f"{cfg.width}x{cfg.height}" if same_size else "", f"{cfg.spp} spp" if same_size else "",
+            f"compile {format_seconds(compile_s)}" if compile_s is not None else ""]
+    sheet = compose_sheet(cells, columns, title=title, info=" · ".join(part for part in info if part))
+    sheet.info["compile_s"] = compile_s
+    return sheet, cells
+
+
+def _jobs(scene, entries, settings: dict, max_cell_width: Optional[int]) -> list[tuple[str, dict]]:
+    """`(label, settings)` per cell that can be rendered now: cell size, then `settings`, then the entry's own."""
+    size = {}
+    width, height = scene.render.width, scene.render.height
+    if settings.get("width") is None and max_cell_width is not None and width > max_cell_width:
+        size = {"width": max_cell_width}
+        if settings.get("height") is None:
+            size["height"] = max(1, round(height * max_cell_width / width))
+    jobs = []
+    for label, entry in entries:
+        if "method" not in entry:
+            raise LumosError(f"sheet: entry {label!r} names no method")
+        if entry["method"] in api.METHODS:
+            jobs.append((label, {**size, **settings, **entry}))
+    if not jobs:
+        raise LumosError(f"sheet: no entry uses an available method ({', '.join(api.METHODS)})")
+    return jobs
+
+
+def _warm_up(scene, jobs: list[dict], progress: bool, say) -> float:
+    """Render each (method, shading) pair once, tiny, so the timed renders find their kernels compiled.
+
+    With `progress` as for the cells, so that loading the progress bar's module is not timed either.
+    """
+    started = time.perf_counter()
+    seen = set()
+    for job in jobs:
+        key = (job["method"], job.get("shading"))
+        if key not in seen:
+            seen.add(key)
+            say(f"compiling {job['method']}" + (f" ({job['shading']})" if job.get("shading") else ""))
+            api.render(scene, progress, **{**job, "width": WARMUP_SIZE, "height": WARMUP_SIZE, "spp": 1})
+    return time.perf_counter() - started
+
+
+def _title_of(scene) -> str:
+    if isinstance(scene, (str, os.PathLike)):
+        return Path(scene).name
+    source = getattr(scene, "source", None)
+    return source.name if source is not None else "scene"
+
+
+def _say(text: str) -> None:
+    print(f"lumos: sheet {text}", file=sys.stderr, flush=True)
+
+
+def format_seconds(seconds: float) -> str:
+    """`0.84 s`, `12.3 s`, `4.2 ms`."""
+    if seconds < 0.005:
+        return f"{seconds * 1e3:.1f} ms"
+    return f"{seconds:.1f} s" if seconds >= 10 else f"{seconds:.2f} s"
+
+
+# ------------------------------------------------------------------------------------------------- drawing
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where everything goes on a sheet of `n` cells of at most `cell_w`×`cell_h` pixels, in `columns`."""
+
+    columns: int
+    rows: int
+    cell_w: int
+    cell_h: int
+    slot_w: int     # column width: the cell, or MIN_SLOT_WIDTH if the cell is narrower
+    header_h: int   # title and info lines, with the margin above them and the gap below
+    caption_h: int  # label and time lines under each cell
+
+    @property
+    def width(self) -> int:
+        return MARGIN + self.columns * (self.slot_w + MARGIN)
+
+    @property
+    def height(self) -> int:
+        return self.header_h + self.rows * (self.cell_h + self.caption_h + MARGIN)
+
+    def slot(self, i: int) -> tuple[int, int]:
+        """Top-left corner of cell `i`'s column slot (row-major)."""
+        row, col = divmod(i, self.columns)
+        return MARGIN + col * (self.slot_w + MARGIN), self.header_h + row * (self.cell_h + self.caption_h + MARGIN)
+
+
+def layout(n: int, columns: Optional[int], cell_w: int, cell_h: int) -> Layout:
+    """The `Layout` of `n` cells; `columns` None means min(MAX_COLUMNS, n), more than `n` means `n`."""
+    columns = min(columns or MAX_COLUMNS, n)
+    fonts = _fonts()
+    header_h = MARGIN + _line_height(fonts["title"]) + _line_height(fonts["info"]) + MARGIN // 2
+    caption_h = CAPTION_PAD + _line_height(fonts["label"]) + _line_height(fonts["time"])
+    return Layout(columns, -(-n // columns), cell_w, cell_h, max(cell_w, MIN_SLOT_WIDTH), header_h, caption_h)
+
+
+def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str = "", info: str = ""):
+    """Draw `cells` (dicts with label, render_s and image, a lumos `Image`) as a grid; returns a PIL RGB image.
+
+    Sets each cell's "box": (x, y, width, height) of its render in the sheet.
+    """
+    from PIL import Image as PILImage
+    from PIL import ImageDraw
+
+    if not cells:
+        raise LumosError("sheet: no cells to draw")
+    lay = layout(len(cells), columns, max(c["image"].width for c in cells), max(c["image"].height for c in cells))
+    sheet = PILImage.new("RGB", (lay.width, lay.height), BACKGROUND)
+    draw = ImageDraw.Draw(sheet)
+    fonts = _fonts()
+    inner = lay.width - 2 * MARGIN
+    draw.text((MARGIN, MARGIN), _fit(draw, title, fonts["title"], inner), fill=INK, font=fonts["title"])
+    draw.text((MARGIN, MARGIN + _line_height(fonts["title"])), _fit(draw, info, fonts["info"], inner),
+              fill=MUTED, font=fonts["info"])
+    for i, cell in enumerate(cells):
+        img = cell["image"]
+        slot_x, slot_y = lay.slot(i)
+        x = slot_x + (lay.slot_w - img.width) // 2
+        cell["box"] = (x, slot_y, img.width, img.height)
+        sheet.paste(PILImage.fromarray(film.to_png8(img.array, img.exposure), mode="RGB"), (x, slot_y))
+        draw.rectangle((x - 1, slot_y - 1, x + img.width, slot_y + img.height), outline=FRAME)
+        y = slot_y + lay.cell_h + CAPTION_PAD
+        for text, font, colour in ((cell["label"], fonts["label"], INK),
+                                   (format_seconds(cell["render_s"]), fonts["time"], MUTED)):
+            _centred(draw, text, font, colour, slot_x, lay.slot_w, y)
+            y += _line_height(font)
+    return sheet
+
+
+def _centred(draw, text: str, font, colour, x: int, width: int, y: int) -> None:
+    text = _fit(draw, text, font, width)
+    draw.text((x + (width - draw.textlength(text, font=font)) // 2, y), text, fill=colour, font=font)
+
+
+def _fit(draw, text: str, font, width: int) -> str:
+    """`text`, shortened with an ellipsis until it is at most `width` pixels wide."""
+    text = _printable(text, font)
+    if draw.textlength(text, font=font) <= width:
+        return text
+    dots = _printable("…", font)
+    while text and draw.textlength(text + dots, font=font) > width:
+        text = text[:-1]
+    return text.rstrip() + dots
+
+
+def _printable(text: str, font) -> str:
+    """The bitmap fallback font has Latin-1 at best: spell the middle dot and the ellipsis in ASCII."""
+    from PIL import ImageFont
+
+    if isinstance(font, ImageFont.FreeTypeFont):
+        return text
+    return text.replace("·", "-").replace("…", "...").encode("ascii", "replace").decode("ascii")
+
+
+@lru_cache(maxsize=None)
+def _fonts() -> dict:
+    """Pillow's built-in font at each size (scalable since Pillow 10.1; the fixed bitmap font before that)."""
+    from PIL import ImageFont
+
+    def font(size: int):
+        try:
+            return ImageFont.load_default(size=size)
+        except (TypeError, OSError):  # Pillow < 10.1 has no size; no FreeType means no scalable font
+            return ImageFont.load_default()
+
+    return {"title": font(TITLE_SIZE), "info": font(INFO_SIZE), "label": font(LABEL_SIZE), "time": font(TIME_SIZE)}
+
+
+def _line_height(font) -> int:
+    """Pixels from one line's top to the next: the glyph box of 'Ag' (ascender to descender) plus a gap."""
+    return font.getbbox("Ag")[3] + 3
+
+
+# ------------------------------------------------------------------------------------------------- writing
+
+
+def check_sheet_path(path: str | os.PathLike) -> Path:
+    """Check that a sheet could be written to `path` (.png, .jpg or .jpeg, in a writable folder); return it."""
+    out = Path(path)
+    fail = f"cannot write sheet '{path}'"
+    if out.suffix.lower() not in SHEET_FORMATS:
+        shown = f"unsupported extension '{out.suffix}'" if out.suffix else "no extension"
+        raise LumosError(f"{fail}: {shown} (a sheet is {', '.join(SHEET_FORMATS)})")
+    if out.is_dir():
+        raise LumosError(f"{fail}: it is a directory")
+    folder = out.parent
+    if not folder.is_dir():
+        raise LumosError(f"{fail}: folder '{folder}' does not exist" if not folder.exists()
+                         else f"{fail}: '{folder}' is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise LumosError(f"{fail}: permission denied (folder '{folder}' is not writable)")
+    return out
+
+
+def save_sheet(sheet, path: str | os.PathLike) -> Path:
+    """Write `sheet` (a PIL image) to `path` atomically, as PNG or JPEG by its extension; returns the path."""
+    from .io.images import _atomic_write
+
+    out = check_sheet_path(path)
+    fmt = SHEET_FORMATS[out.suffix.lower()]
+    options = {"quality": 95} if fmt == "JPEG" else {}
+    _atomic_write(out, lambda tmp: sheet.save(tmp, format=fmt, **options))
+    return out

@@ -1,0 +1,308 @@
+"""`lumos sheet` and `lumos.sheet`: the grid's size, the cells are the renders pixel for pixel, captions carry text,
+and bad input is one line with exit status 2.
+
+Most tests register fake methods in `lumos.api.METHODS` (a fake `raster` whose grey level follows `shading`, and
+a second fake method), so the grid holds several cells without compiling a kernel; the ones marked slow render
+with the real `raycast`.
+"""
+
+import io
+import sys
+import types
+
+import numpy as np
+import pytest
+from PIL import Image as PILImage
+
+import lumos
+from lumos import api, cli, film, sheet
+from lumos.errors import LumosError
+from lumos.methods.common import Film
+
+TINY = """\
+camera: {position: [0, 0, 4], look_at: [0, 0, 0], fov: 40}
+render: {width: 32, height: 24}
+lights:
+  - {type: point, position: [2, 3, 4], intensity: 1}
+objects:
+  - {type: sphere, center: [0, 0, 0], radius: 1, material: {kd: 0.8}}
+"""
+#: Grey level of the fake raster per shading, and of the second fake method.
+LEVELS = {("raster", "flat"): 0.1, ("raster", "gouraud"): 0.3, ("raster", "phong"): 0.9, ("ramp", None): 0.6}
+
+
+@pytest.fixture
+def tiny(tmp_path):
+    path = tmp_path / "tiny.yaml"
+    path.write_text(TINY)
+    return path
+
+
+def scene_file(tmp_path, width, height):
+    path = tmp_path / f"scene{width}x{height}.yaml"
+    path.write_text(TINY.replace("width: 32, height: 24", f"width: {width}, height: {height}"))
+    return path
+
+
+def fake_radiance(method, shading, width, height):
+    """A horizontal ramp up to the method's level, with a bright first column so any offset shows."""
+    level = LEVELS[(method, shading if method == "raster" else None)]
+    radiance = np.empty((height, width, 3), np.float32)
+    radiance[:] = np.linspace(0.0, level, width, dtype=np.float32)[None, :, None]
+    radiance[:, 0] = (1.0, 0.0, 0.0)
+    return radiance
+
+
+@pytest.fixture
+def fakes(monkeypatch):
+    """`api.METHODS` = a fake 'raster' and a fake 'ramp'; returns the settings of every call, in order."""
+    calls = []
+
+    def render_fake(compiled, camera, settings, progress=None):
+        calls.append(settings)
+        return Film(fake_radiance(settings.method, settings.shading, settings.width, settings.height))
+
+    module = types.ModuleType("lumos_sheet_fakes")
+    module.render_fake = render_fake
+    monkeypatch.setitem(sys.modules, module.__name__, module)
+    monkeypatch.setattr(api, "METHODS", {"raster": f"{module.__name__}:render_fake",
+                                         "ramp": f"{module.__name__}:render_fake"})
+    return calls
+
+
+def run(capsys, *argv):
+    code = cli.main([str(a) for a in argv])
+    _, err = capsys.readouterr()
+    return code, err
+
+
+def one_error_line(err: str) -> str:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lumos: error: "), err
+    return lines[0]
+
+
+def read_png(path) -> np.ndarray:
+    with PILImage.open(path) as img:
+        assert img.format == "PNG" and img.mode == "RGB"
+        return np.asarray(img)
+
+
+def crop(pixels, box):
+    x, y, w, h = box
+    return pixels[y : y + h, x : x + w]
+
+
+def cell_box(lay, i, width, height):
+    """Where `compose_sheet` puts render `i`: at the top of its slot, centred across the slot."""
+    x, y = lay.slot(i)
+    return x + (lay.slot_w - width) // 2, y, width, height
+
+
+def dark_pixels(pixels) -> int:
+    return int((pixels.max(axis=2) < 128).sum())
+
+
+# ------------------------------------------------------------------------------------------------- entries
+
+
+def test_default_entries_follow_the_registry(monkeypatch):
+    monkeypatch.setattr(api, "METHODS", {"raycast": "lumos.methods.raycast:render_raycast"})
+    assert sheet.default_entries() == [("raycast", {"method": "raycast", "shading": None})]
+    monkeypatch.setattr(api, "METHODS", {"raycast": "x:y", "raster": "x:y"})
+    entries = sheet.default_entries()
+    assert [label for label, _ in entries] == ["raster · flat", "raster · Gouraud", "raster · Phong", "raycast"]
+    assert [s["shading"] for _, s in entries] == ["flat", "gouraud", "phong", None]
+
+
+def test_entries_for_keeps_the_order_named(fakes):
+    labels = [label for label, _ in sheet.entries_for(["ramp", " raster", "ramp"])]
+    assert labels == ["ramp", "raster · flat", "raster · Gouraud", "raster · Phong"]
+    with pytest.raises(LumosError, match="unknown method 'nope'"):
+        sheet.entries_for(["raster", "nope"])
+    with pytest.raises(LumosError, match="at least one method"):
+        sheet.entries_for(["", " "])
+
+
+def test_entries_of_unavailable_methods_are_skipped(fakes, tiny):
+    entries = [("ghost", {"method": "ghost"}), ("ramp", {"method": "ramp"})]
+    image, cells = sheet.make_sheet(tiny, entries)
+    assert [c["label"] for c in cells] == ["ramp"] and image.size[0] < 2 * sheet.MIN_SLOT_WIDTH
+    with pytest.raises(LumosError, match="no entry uses an available method"):
+        sheet.make_sheet(tiny, [("ghost", {"method": "ghost"})])
+
+
+# ------------------------------------------------------------------------------------------------ the grid
+
+
+@pytest.mark.parametrize("columns, rows", [(None, 1), ("3", 2), ("2", 2), ("9", 1)])
+def test_cli_sheet_size_is_columns_times_cells_plus_captions(capsys, fakes, tiny, tmp_path, columns, rows):
+    out = tmp_path / "sheet.png"
+    code, err = run(capsys, "sheet", tiny, "-o", out, "-q", *(["--columns", columns] if columns else []))
+    assert code == 0, err
+    n_columns = min(int(columns or 4), 4)  # 4 cells: raster ×3, ramp
+    slot_w = max(32, sheet.MIN_SLOT_WIDTH)
+    lay = sheet.layout(4, n_columns, 32, 24)
+    assert (lay.columns, lay.rows) == (n_columns, rows)
+    assert lay.caption_h >= sheet.LABEL_SIZE + sheet.TIME_SIZE and lay.header_h >= sheet.TITLE_SIZE
+    expected = (sheet.MARGIN + n_columns * (slot_w + sheet.MARGIN),
+                lay.header_h + rows * (24 + lay.caption_h + sheet.MARGIN))
+    assert read_png(out).shape[1::-1] == expected
+
+
+def test_wide_cells_set_the_column_width(capsys, fakes, tiny, tmp_path):
+    out = tmp_path / "sheet.png"
+    code, err = run(capsys, "sheet", tiny, "-o", out, "-q", "--width", 260, "--height", 10, "--columns", 2)
+    assert code == 0, err
+    lay = sheet.layout(4, 2, 260, 10)
+    assert read_png(out).shape[1::-1] == (sheet.MARGIN + 2 * (260 + sheet.MARGIN),
+                                          lay.header_h + 2 * (10 + lay.caption_h + sheet.MARGIN))
+
+
+def test_cells_are_the_renders_in_reading_order(fakes, tiny):
+    image, cells = sheet.make_sheet(tiny, columns=3)
+    pixels = np.asarray(image)
+    assert [c["label"] for c in cells] == ["raster · flat", "raster · Gouraud", "raster · Phong", "ramp"]
+    lay = sheet.layout(4, 3, 32, 24)
+    for i, cell in enumerate(cells):
+        assert cell["box"] == cell_box(lay, i, 32, 24)
+        alone = api.render(tiny, method=cell["method"], shading=cell["shading"])
+        assert np.array_equal(crop(pixels, cell["box"]), film.to_png8(alone.array)), cell["label"]
+        assert cell["render_s"] == cell["image"].stats["render_s"] >= 0.0
+    xs = sorted({c["box"][0] for c in cells})
+    ys = sorted({c["box"][1] for c in cells})
+    assert len(xs) == 3 and len(ys) == 2
+    assert np.diff(xs).tolist() == [lay.slot_w + sheet.MARGIN] * 2
+    assert ys[1] - ys[0] == 24 + lay.caption_h + sheet.MARGIN
+
+
+def test_captions_and_title_carry_text(capsys, fakes, tiny, tmp_path):
+    out = tmp_path / "sheet.png"
+    code, err = run(capsys, "sheet", tiny, "-o", out, "-q", "--columns", 3)
+    assert code == 0, err
+    pixels = read_png(out)
+    lay = sheet.layout(4, 3, 32, 24)
+
+    def strip(i):  # the caption strip under slot i, below the frame line
+        x, y = lay.slot(i)
+        return pixels[y + 24 + 1 : y + 24 + lay.caption_h, x : x + lay.slot_w]
+
+    for i in range(4):
+        assert dark_pixels(strip(i)) > 30, f"caption {i} is blank"
+    assert not np.array_equal(strip(0), strip(1))  # 'raster · flat' vs 'raster · Gouraud'
+    assert dark_pixels(strip(4)) == 0  # an empty slot: the text above came from the captions
+    assert dark_pixels(pixels[: lay.header_h]) > 50  # title and info line
+    assert (pixels[0] == sheet.BACKGROUND).all()
+
+
+def test_default_cell_size_is_capped_unless_a_width_is_given(fakes, tmp_path):
+    wide = scene_file(tmp_path, 1280, 96)
+    _, cells = sheet.make_sheet(wide, [("ramp", {"method": "ramp"})], warm_up=False)
+    assert (cells[0]["image"].width, cells[0]["image"].height) == (640, 48)
+    _, cells = sheet.make_sheet(wide, [("ramp", {"method": "ramp"})], warm_up=False, width=100)
+    assert (cells[0]["image"].width, cells[0]["image"].height) == (100, 96)
+
+
+def test_flags_reach_every_render_after_one_warm_up_each(capsys, fakes, tiny, tmp_path):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.png", "-q", "--spp", 3, "--threads", 1,
+                    "--width", 20, "--height", 10)
+    assert code == 0, err
+    warm, timed = fakes[:4], fakes[4:]
+    assert [(s.method, s.shading, s.width) for s in warm][:3] == [("raster", "flat", 8), ("raster", "gouraud", 8),
+                                                                   ("raster", "phong", 8)]
+    assert len(timed) == 4 and all((s.width, s.height, s.spp, s.threads) == (20, 10, 3, 1) for s in timed)
+    assert [s.shading for s in timed[:3]] == ["flat", "gouraud", "phong"]
+
+
+def test_methods_flag_picks_cells(capsys, fakes, tiny, tmp_path):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.png", "-q", "--methods", "ramp")
+    assert code == 0, err
+    assert {s.method for s in fakes} == {"ramp"}
+    assert read_png(tmp_path / "s.png").shape[1] == sheet.MARGIN * 2 + sheet.MIN_SLOT_WIDTH
+
+
+def test_progress_line_per_cell_unless_quiet(capsys, fakes, tiny, tmp_path):
+    out = tmp_path / "s.png"
+    code, err = run(capsys, "sheet", tiny, "-o", out)
+    assert code == 0, err
+    for i, label in enumerate(["raster · flat", "raster · Gouraud", "raster · Phong", "ramp"], 1):
+        assert f"[{i}/4] {label}: 32x24, " in err
+    assert err.rstrip().splitlines()[-1].endswith(f"-> {out}")
+    code, err = run(capsys, "sheet", tiny, "-o", out, "-q")
+    assert code == 0 and err == ""
+
+
+def test_jpeg_output(capsys, fakes, tiny, tmp_path):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.JPG", "-q")
+    assert code == 0, err
+    with PILImage.open(tmp_path / "s.JPG") as img:
+        assert img.format == "JPEG" and img.size == (sheet.layout(4, None, 32, 24).width,
+                                                     sheet.layout(4, None, 32, 24).height)
+
+
+def test_default_output_in_cwd(capsys, monkeypatch, fakes, tiny, tmp_path):
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    code, err = run(capsys, "sheet", tiny, "-q")
+    assert code == 0, err
+    assert read_png(work / "tiny-sheet.png").shape[2] == 3
+
+
+# ----------------------------------------------------------------------------------------------- bad input
+
+
+def test_unknown_method_in_methods(capsys, tiny, tmp_path):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.png", "--methods", "raycast,nope")
+    assert code == 2 and "--methods: unknown method 'nope' (available: " in one_error_line(err)
+    assert not (tmp_path / "s.png").exists()
+
+
+@pytest.mark.parametrize("name", ["s.exr", "s.npy", "s.gif", "s"])
+def test_only_png_or_jpeg_output(capsys, tiny, tmp_path, name):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / name)
+    assert code == 2 and "a sheet is .png, .jpg, .jpeg" in one_error_line(err)
+    assert list(tmp_path.iterdir()) == [tiny]
+
+
+def test_missing_output_folder(capsys, tiny, tmp_path):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "no" / "s.png")
+    assert code == 2 and "does not exist" in one_error_line(err)
+
+
+def test_missing_scene(capsys, tmp_path):
+    code, err = run(capsys, "sheet", tmp_path / "nope.yaml", "-o", tmp_path / "s.png")
+    assert code == 2 and "nope.yaml: no such file" in one_error_line(err)
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--columns", "0"], "columns must be at least 1, got 0"),
+    (["--spp", "0"], "render.spp: must be at least 1, got 0"),
+    (["--width", "-3"], "render.width"),
+])
+def test_bad_values_fail_before_any_render(capsys, fakes, tiny, tmp_path, flags, message):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.png", *flags)
+    assert code == 2 and message in one_error_line(err)
+    assert fakes == [] and not (tmp_path / "s.png").exists()
+
+
+def test_help_lists_sheet(capsys):
+    assert cli.main(["--help"]) == 0 and "sheet" in capsys.readouterr().out
+    assert cli.main(["sheet", "--help"]) == 0 and "--columns" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------------------- real renders
+
+
+@pytest.mark.slow
+def test_raycast_cell_is_the_single_render_png(capsys, tiny, tmp_path):
+    out = tmp_path / "sheet.png"
+    code, err = run(capsys, "sheet", tiny, "-o", out, "-q", "--methods", "raycast")
+    assert code == 0, err
+    pixels = read_png(out)
+    lay = sheet.layout(1, None, 32, 24)
+    assert pixels.shape[1::-1] == (lay.width, lay.height)
+    with PILImage.open(io.BytesIO(lumos.render(tiny, method="raycast").to_png_bytes())) as alone:
+        expected = np.asarray(alone.convert("RGB"))
+    assert dark_pixels(expected) < expected.shape[0] * expected.shape[1]  # the sphere is lit: not all black
+    assert np.array_equal(crop(pixels, cell_box(lay, 0, 32, 24)), expected)
