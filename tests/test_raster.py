@@ -349,3 +349,99 @@ def test_analytic_shapes_render_close_to_raycast():
     assert np.mean(same) > 0.98
     err = np.abs(ras.array - ray.array).max(axis=2)[same]
     assert np.mean(err < 2e-2) > 0.97
+
+
+def test_shadow_rays_darken_what_an_occluder_hides():
+    # a sphere above a floor, a light straight above: the floor point under the sphere is in its shadow
+    scene = {
+        "camera": {"position": [0.0, 0.3, 4.0], "look_at": [0.0, 0.0, 0.0], "fov": 40.0},
+        "ambient": 0.2,
+        "lights": [{"type": "point", "position": [0.0, 4.0, 0.0], "intensity": 1.0}],
+        "objects": [
+            {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": {"ka": 0.5, "kd": 0.5}},
+            {"type": "sphere", "center": [0.0, 1.0, 0.0], "radius": 0.5, "material": {"ka": 0.5, "kd": 0.5}},
+        ],
+    }
+    W = H = 65  # odd: the centre pixel looks exactly at look_at, the floor point under the sphere
+    lit = lumos.render(scene, method="raster", width=W, height=H).array[32, 32]
+    shadowed = lumos.render(scene, method="raster", width=W, height=H, shadows=True)
+    assert np.allclose(lit, 0.5 * 0.2 + 0.5 * 1.0, atol=1e-6)
+    assert np.allclose(shadowed.array[32, 32], 0.5 * 0.2, atol=1e-6)  # ambient only
+    assert shadowed.stats["rays"] > 0
+    # a floor point far from the sphere is lit either way
+    assert np.allclose(shadowed.array[60, 5], lumos.render(scene, method="raster", width=W, height=H).array[60, 5])
+
+
+def half_plane_coverage(width, height, a, b, c, n=64):
+    """Exact-enough area of each pixel where a·x + b·y + c > 0 (n×n point sampling)."""
+    o = (np.arange(n) + 0.5) / n
+    x = np.arange(width)[None, :, None, None] + o[None, None, None, :]
+    y = np.arange(height)[:, None, None, None] + o[None, None, :, None]
+    return (a * x + b * y + c > 0).mean(axis=(2, 3))
+
+
+def test_supersampling_converges_to_pixel_coverage():
+    W, H = 48, 36
+    # a white triangle whose long edge crosses the image at a slant; ambient-only material, so value = coverage
+    tri = [[-30.0, -30.0, 0.0], [30.0, 12.0, 0.0], [-30.0, 200.0, 0.0]]  # only the first edge crosses the image
+    scene = mesh_scene(ortho(W, H), tri, [[0, 1, 2]], material={"ka": 1.0}, ambient=1.0)
+    # the edge from (−30, −30) to (30, 12) in world → pixels (x + 24, 18 − y)
+    (x0, y0), (x1, y1) = (-30.0 + 24, 18 + 30.0), (30.0 + 24, 18 - 12.0)
+    a, b = -(y1 - y0), (x1 - x0)
+    c = -(a * x0 + b * y0)
+    if a * (-30.0 + 24) + b * (18 - 200.0) + c < 0:  # orient the half-plane towards the third vertex
+        a, b, c = -a, -b, -c
+    cover = half_plane_coverage(W, H, a, b, c)
+    edge = (cover > 0.02) & (cover < 0.98)
+    assert edge.sum() > 40
+    err = {}
+    for spp in (1, 16):
+        img = lumos.render(scene, method="raster", width=W, height=H, spp=spp).array[..., 0]
+        inside = img[~edge & (cover > 0.5)]
+        assert np.allclose(inside, 1.0)
+        err[spp] = np.abs(img[edge] - cover[edge]).mean()
+    assert err[16] < 0.05 < err[1]
+
+
+def test_area_lights_are_seen_from_their_emitting_side_only():
+    scene = {
+        "camera": {"position": [0.0, 0.0, 4.0], "look_at": [0.0, 0.0, 0.0], "fov": 40.0},
+        "lights": [{"type": "area", "shape": "rect", "corner": [-1.0, -1.0, 0.0], "edge_u": [2.0, 0.0, 0.0],
+                    "edge_v": [0.0, 2.0, 0.0], "radiance": [3.0, 2.0, 1.0]}],
+    }
+    front = lumos.render(scene, method="raster", width=33, height=33).array
+    assert np.allclose(front[16, 16], [3.0, 2.0, 1.0])
+    scene["lights"][0]["edge_u"], scene["lights"][0]["edge_v"] = [0.0, 2.0, 0.0], [2.0, 0.0, 0.0]
+    back = lumos.render(scene, method="raster", width=33, height=33).array
+    assert np.allclose(back[16, 16], 0.0)
+
+
+@pytest.mark.parametrize("triangulate, differs", [(False, True), (True, False)])
+def test_orientation_dependence_of_polygon_interpolation(triangulate, differs):
+    """The textbook: interpolating along edges and scan lines makes a polygon's shading depend on its
+    orientation on screen; triangles do not."""
+    quad = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]]
+    tilted = unit(np.array([0.8, 0.0, 0.6]))
+    normals = [[0.0, 0.0, 1.0], tilted, tilted, tilted]  # one bright corner: intensities 1, 0.6, 0.6, 0.6
+    light = [{"type": "directional", "direction": [0.0, 0.0, -1.0], "intensity": 1.0}]
+    centres = []
+    for up in ([0.0, 1.0, 0.0], [1.0, 1.0, 0.0]):  # the quad upright, then turned 45° on screen
+        cam = {"type": "orthographic", "position": [0.0, 0.0, 5.0], "look_at": [0.0, 0.0, 0.0], "up": up,
+               "size": 3.0}
+        scene = mesh_scene(cam, quad, [[0, 1, 2, 3]], normals=normals, material={"kd": 1.0}, lights=light,
+                           triangulate=triangulate)
+        img = lumos.render(scene, method="raster", shading="gouraud", width=33, height=33).array
+        centres.append(img[16, 16, 0])
+    if differs:
+        assert abs(centres[0] - 0.7) < 1e-6  # upright: the mean of the four corners (bilinear)
+        assert abs(centres[1] - centres[0]) > 0.05
+    else:
+        assert abs(centres[1] - centres[0]) < 1e-6
+
+
+def test_bad_raster_keys_are_clear_errors():
+    bad = mesh_scene(ortho(8, 8), TRI, [[0, 1, 2]], crease_angle=200)
+    with pytest.raises(lumos.LumosError, match="crease_angle"):
+        lumos.load_scene(bad)
+    with pytest.raises(lumos.LumosError, match="tessellation"):
+        lumos.render(mesh_scene(ortho(8, 8), TRI, [[0, 1, 2]]), method="raster", tessellation=2)
