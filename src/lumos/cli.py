@@ -62,8 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
     render.add_argument("-o", "--output", metavar="OUT", help="image to write: .png, .exr, .pfm or .npy "
                         "(default: <scene name>.png in the current folder)")
-    render.add_argument("--method", metavar="M", help="rendering method (e.g. raycast)")
-    render.add_argument("--shading", metavar="S", help="flat, gouraud or phong")
+    render.add_argument("--method", metavar="M", help="rendering method: raycast or raster")
+    render.add_argument("--shading", metavar="S", help="flat, gouraud or phong (method raster)")
     render.add_argument("--width", type=int, metavar="W", help="image width in pixels")
     render.add_argument("--height", type=int, metavar="H", help="image height in pixels")
     render.add_argument("--spp", type=int, metavar="N", help="samples per pixel")
