@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 import trimesh
-from naive import camera_basis, classic_local, inside_polygon, unit
+from naive import classic_local, inside_polygon, unit
 
 import lumos
 from lumos.api import resolve_settings

@@ -43,9 +43,6 @@ if os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0"):
 
 #: Device-style helpers: inlined into their callers by LLVM, cached on disk.
 njit = numba.njit(cache=True, nogil=True, error_model="numpy")
-#: Hot helpers with many array arguments, inlined into their caller at Numba-IR level so that no call (and no
-#: atomic reference counting of each array argument) remains in the loop. Not for use inside prange bodies.
-njit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
 #: Top-level kernels run with prange over rows or tiles.
 njit_parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 prange = numba.prange
