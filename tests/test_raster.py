@@ -445,3 +445,28 @@ def test_bad_raster_keys_are_clear_errors():
         lumos.load_scene(bad)
     with pytest.raises(lumos.LumosError, match="tessellation"):
         lumos.render(mesh_scene(ortho(8, 8), TRI, [[0, 1, 2]]), method="raster", tessellation=2)
+
+
+@pytest.mark.parametrize("shading", ["flat", "gouraud", "phong"])
+def test_interpolated_normals_do_not_light_the_dark_side_at_silhouettes(shading):
+    # a coarse sphere lit from the right: near its left outline, vertex normals face slightly away from the eye;
+    # turning them towards the eye on their own would light the unlit half
+    scene = {"camera": {"position": [0, 0, 5], "fov": 30},
+             "lights": [{"type": "directional", "direction": [-1, 0, 0], "intensity": 1}],
+             "objects": [{"type": "sphere", "material": {"kd": 1}}]}
+    img = lumos.render(scene, method="raster", shading=shading, tessellation=8, width=101, height=101).array
+    assert img[:, :50].max() == 0.0
+    assert img[:, 51:].max() > 0.8
+
+
+def test_polygons_kept_whole_honour_the_crease_angle_and_flat_shades_each_polygon_once():
+    cube_v = [[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)]
+    cube_f = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    cam = {"position": [3.0, 2.5, 4.0], "look_at": [0.0, 0.0, 0.0], "fov": 40.0}
+    for triangulate in (False, True):
+        scene = lumos.load_scene(mesh_scene(cam, cube_v, cube_f, crease_angle=60, triangulate=triangulate))
+        mesh = compile_scene(scene, resolve_settings(scene, {"method": "raster"})).raster
+        assert len(mesh.positions) == 24  # split: each face its own normals
+        assert np.allclose(np.abs(mesh.normals).max(axis=1), 1.0)
+        # flat shading: both triangles of a face are shaded at the face's centre with its normal
+        assert len(np.unique(np.round(mesh.prim_point, 9), axis=0)) == 6

@@ -49,7 +49,7 @@ def prepare_mesh(obj, world_from_object: Optional[np.ndarray], keep_polygons: bo
     if fix is not None and fix.repair_t_junctions:
         # the inserted vertices are existing ones, so per-vertex normals and uvs stay valid
         polys = meshops.repair_t_junctions(verts, [np.asarray(p) for p in polys])
-    groups = None
+    groups = None if isinstance(polys, list) or fix is None else fix.face_polygon
     if isinstance(polys, list):
         keep = keep_polygons and not fix.triangulate and not fix.subdivide and all(len(p) < MAX_VERTS for p in polys)
         if not keep:
@@ -58,9 +58,10 @@ def prepare_mesh(obj, world_from_object: Optional[np.ndarray], keep_polygons: bo
         verts, polys, uvs = meshops.subdivide(verts, polys, scheme=fix.subdivision, levels=fix.subdivide, uvs=uvs)
         normals, groups = None, None  # new vertices need new normals; each small triangle is its own polygon
     if normals is None and fix is not None and fix.smooth:
-        if isinstance(polys, list):  # polygons drawn as polygons: normals from their triangles, shared at vertices
-            tris, _ = meshops.triangulate(verts, polys)
-            _, _, normals, _ = meshops.vertex_normals(verts, tris, weighting=fix.normal_weighting)
+        if isinstance(polys, list):  # polygons drawn as polygons
+            verts, polys, normals, source = _polygon_normals(verts, polys, fix.normal_weighting, fix.crease_angle)
+            if uvs is not None:
+                uvs = uvs[source]
         else:
             verts, polys, normals, source = meshops.vertex_normals(
                 verts, polys, weighting=fix.normal_weighting, crease_angle=fix.crease_angle)
@@ -71,6 +72,21 @@ def prepare_mesh(obj, world_from_object: Optional[np.ndarray], keep_polygons: bo
     if groups is None and not isinstance(polys, list):
         groups = np.arange(len(polys))
     return PreparedMesh(verts, normals, uvs, polys, groups)
+
+
+def _polygon_normals(verts, polys, weighting, crease_angle):
+    """Vertex normals for polygons kept whole: computed on their triangles (crease splitting included), then
+    each polygon corner takes the (possibly split) vertex its triangles gave that corner."""
+    tris, owner = meshops.triangulate(verts, polys)
+    verts2, tris2, normals, source = meshops.vertex_normals(verts, tris, weighting=weighting,
+                                                            crease_angle=crease_angle)
+    if len(verts2) == len(verts):
+        return verts2, polys, normals, source
+    corner = {}
+    for (p, v_old, v_new) in zip(np.repeat(owner, 3), source[tris2.ravel()], tris2.ravel()):
+        corner[(int(p), int(v_old))] = int(v_new)
+    new_polys = [np.array([corner[(i, int(v))] for v in poly], np.int64) for i, poly in enumerate(polys)]
+    return verts2, new_polys, normals, source
 
 
 def facet(m: PreparedMesh) -> PreparedMesh:

@@ -71,8 +71,8 @@ def _tess_part(t, material, object_id, light=-1) -> _Part:
 
 
 def _plane_part(world_from_canonical, center, extent, segments, material, object_id) -> _Part:
-    """A plane as a square patch around `center`, 50 extents wide, its grid lines spaced quadratically so that
-    cells are small near the camera and large towards the horizon."""
+    """A plane as a square patch around `center` reaching 50 extents out on each side, its grid lines spaced
+    quadratically so that cells are small near the camera and large towards the horizon."""
     t = tessellate_plane(world_from_canonical, center, 1.0, segments)
     m = world_from_canonical
     e1 = m[:3, 0] / np.linalg.norm(m[:3, 0])

@@ -110,6 +110,20 @@ def face_forward(n, d):
 
 
 @njit
+def shading_side(n_sh, n_geo, V):
+    """The shading normal on the viewer's side of a two-sided surface: turned to agree with the geometric
+    normal, and turned over with it where the geometric normal faces away from V. Near a silhouette an
+    interpolated normal may still face slightly away from V; it is kept so, since turning it towards the
+    viewer on its own would light the dark side of the object."""
+    s = 1.0
+    if n_geo[0] * V[0] + n_geo[1] * V[1] + n_geo[2] * V[2] < 0.0:
+        s = -s
+    if n_sh[0] * n_geo[0] + n_sh[1] * n_geo[1] + n_sh[2] * n_geo[2] < 0.0:
+        s = -s
+    return (n_sh[0] * s, n_sh[1] * s, n_sh[2] * s)
+
+
+@njit
 def offset_origin(p, n, d_out, eps):
     """A ray origin off the surface at p, on the side d_out leaves towards (avoids self-intersection)."""
     scale = eps * max(1.0, abs(p[0]), abs(p[1]), abs(p[2]))

@@ -9,7 +9,8 @@ Shading then reads the G-buffer, one pixel at a time, through the one illuminati
 - Gouraud: the model evaluated at each vertex with its vertex normal, intensities interpolated;
 - Phong:   normals interpolated and renormalised, the model evaluated at each pixel.
 
-The shading normal faces the viewer (DESIGN.md §3), as in the ray methods. With `spp` > 1 the image is
+Surfaces are two-sided, as in the ray methods: the shading normal is taken on the side of the polygon the
+viewer sees (Gouraud keeps an intensity for each side of every vertex). With `spp` > 1 the image is
 rendered `spp` times with the sample point moved within the pixel (stratified, the same offset for every pixel,
 as an accumulation buffer does) and averaged. `shadows: true` adds shadow rays against a BVH of the same
 polygons; `cull_backfaces: true` skips polygons facing away; `perspective_correct: false` interpolates in
@@ -28,12 +29,14 @@ from ..kernels.jit import njit, njit_parallel, prange
 from ..kernels.layout import LIGHT_SPHERE, MAT_EMISSION, MAT_KD
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
+from ..kernels.surface import shading_side
 from ..kernels.views import geometry_of, lighting_of
 from .common import Film, allocate_aovs, check_memory, set_threads
 
 FLAT, GOURAUD, PHONG = 0, 1, 2
 _SHADING = {"flat": FLAT, "gouraud": GOURAUD, "phong": PHONG}
-#: G-buffer channels: world position, interpolated normal, and (Gouraud) interpolated intensity.
+#: G-buffer channels: world position, interpolated normal, and (Gouraud) the interpolated intensities of the
+#: side the vertex normals point to and of the other side.
 G_POS, G_NORMAL, G_COLOUR = 0, 3, 6
 _CHUNK = 2048
 
@@ -62,21 +65,33 @@ def _facing(n, V):
 
 @njit_parallel
 def _light_points(sa, points, normals, materials_of, cam_vecs, ortho, seed, shadows, out, rays):
-    """The model at each point with its normal (Gouraud vertices, flat polygon centroids) → out (n, 3)."""
-    n = points.shape[0]
-    for c in prange((n + _CHUNK - 1) // _CHUNK):
+    """The model at each point (flat: polygon centroids, their normals turned to the viewer) → out[:, 0:3];
+    with out (n, 6) (Gouraud vertices) the normal is used as given for out[:, 0:3] and reversed for
+    out[:, 3:6], the intensities of the side the normal points to and of the other side: which side the
+    viewer sees is known per pixel, from the polygon's face normal."""
+    n_points = points.shape[0]
+    for c in prange((n_points + _CHUNK - 1) // _CHUNK):
         geo, lit = geometry_of(sa), lighting_of(sa)
         stack = np.empty(config.BVH_STACK, np.int64)
         count = 0
-        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
+        for i in range(c * _CHUNK, min(n_points, (c + 1) * _CHUNK)):
             p = (points[i, 0], points[i, 1], points[i, 2])
             V = _toward_eye(p, cam_vecs, ortho)
-            nn = _facing((normals[i, 0], normals[i, 1], normals[i, 2]), V)
-            (r, g, b), extra = illuminate(lit, geo, p, nn, V, materials_of[i], seed, i, 0, shadows, stack)
+            n = (normals[i, 0], normals[i, 1], normals[i, 2])
+            if out.shape[1] == 3:
+                n = _facing(n, V)
+            (r, g, b), extra = illuminate(lit, geo, p, n, V, materials_of[i], seed, i, 0, shadows, stack)
             out[i, 0] = r
             out[i, 1] = g
             out[i, 2] = b
             count += extra
+            if out.shape[1] == 6:
+                (r, g, b), extra = illuminate(lit, geo, p, (-n[0], -n[1], -n[2]), V, materials_of[i], seed, i, 1,
+                                              shadows, stack)
+                out[i, 3] = r
+                out[i, 4] = g
+                out[i, 5] = b
+                count += extra
         rays[c] = count
 
 
@@ -107,14 +122,20 @@ def _shade(sa, ids, gbuf, prim_info, prim_normal, prim_colour, cam_vecs, ortho, 
                 n_sh = _facing(fn, V)
                 r, g, b = prim_colour[prim, 0], prim_colour[prim, 1], prim_colour[prim, 2]
             else:
-                n_sh = _facing((np.float64(gbuf[y, x, G_NORMAL]), np.float64(gbuf[y, x, G_NORMAL + 1]),
-                                np.float64(gbuf[y, x, G_NORMAL + 2])), V)
-                if n_sh[0] == 0.0 and n_sh[1] == 0.0 and n_sh[2] == 0.0:
-                    n_sh = _facing(fn, V)
+                n_in = _facing((np.float64(gbuf[y, x, G_NORMAL]), np.float64(gbuf[y, x, G_NORMAL + 1]),
+                                np.float64(gbuf[y, x, G_NORMAL + 2])), fn)  # unit, on the face normal's side
+                if n_in[0] == 0.0 and n_in[1] == 0.0 and n_in[2] == 0.0:
+                    n_in = fn
+                n_sh = shading_side(n_in, fn, V)
                 if shading == GOURAUD:
-                    r = np.float64(gbuf[y, x, G_COLOUR])
-                    g = np.float64(gbuf[y, x, G_COLOUR + 1])
-                    b = np.float64(gbuf[y, x, G_COLOUR + 2])
+                    # the intensity of the side the viewer sees: the vertex normals' own side or the other one
+                    raw = (gbuf[y, x, G_NORMAL] * fn[0] + gbuf[y, x, G_NORMAL + 1] * fn[1]
+                           + gbuf[y, x, G_NORMAL + 2] * fn[2])
+                    back = (fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] < 0.0) != (raw < 0.0)
+                    c = G_COLOUR + 3 if back else G_COLOUR
+                    r = np.float64(gbuf[y, x, c])
+                    g = np.float64(gbuf[y, x, c + 1])
+                    b = np.float64(gbuf[y, x, c + 2])
                 else:
                     (r, g, b), extra = illuminate(lit, geo, p, n_sh, V, mat_id, seed, y * width + x, sample,
                                                   shadows, stack)
@@ -217,7 +238,7 @@ def render_raster(compiled, camera, settings, progress=None) -> Film:
 
     # vertex stage: the attributes the rasterizer interpolates (and, for Gouraud, the intensity at each vertex)
     nv = len(mesh.positions)
-    k = 9 if shading == GOURAUD else 6
+    k = 12 if shading == GOURAUD else 6
     attrs = np.empty((nv, k))
     attrs[:, G_POS:G_POS + 3] = mesh.positions
     attrs[:, G_NORMAL:G_NORMAL + 3] = mesh.normals
@@ -225,10 +246,10 @@ def render_raster(compiled, camera, settings, progress=None) -> Film:
     if shading == GOURAUD and nv:
         vert_material = np.zeros(nv, np.int32)
         vert_material[mesh.prim_index] = np.repeat(mesh.prim_info[:, 0], np.diff(mesh.prim_start))
-        colour = np.zeros((nv, 3))
+        colour = np.zeros((nv, 6))
         counts = np.zeros(-(-nv // _CHUNK), np.int64)
         _light_points(sa, mesh.positions, mesh.normals, vert_material, cam_vecs, ortho, seed, shadows, colour, counts)
-        attrs[:, G_COLOUR:G_COLOUR + 3] = colour
+        attrs[:, G_COLOUR:G_COLOUR + 6] = colour
         rays += int(counts.sum())
     if shading == FLAT and mesh.n_prims:
         prim_colour = np.zeros((mesh.n_prims, 3))

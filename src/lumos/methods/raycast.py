@@ -16,7 +16,7 @@ from ..kernels.camera import camera_ray
 from ..kernels.illumination import illuminate
 from ..kernels.jit import njit, njit_parallel, prange
 from ..kernels.layout import LIGHT_SPHERE, MAT_EMISSION, MAT_KD
-from ..kernels.surface import surface_at
+from ..kernels.surface import shading_side, surface_at
 from ..kernels.traverse import closest_hit
 from ..kernels.views import geometry_of, lighting_of, surfaces_of
 from ..kernels.vec import dot, mul
@@ -34,9 +34,8 @@ def shade_hit(surf, lit, geo, o, d, hit, seed, pixel, sample, shadows, stack):
     emit = 1.0
     if light_id >= 0 and lit.light_kind[light_id] != LIGHT_SPHERE and dot(n_geo, V) < 0.0:
         emit = 0.0
-    # the shading normal faces the viewer (DESIGN.md §3)
-    if dot(n_sh, V) < 0.0:
-        n_sh = mul(n_sh, -1.0)
+    # the shading normal on the viewer's side of the surface (DESIGN.md §3: two-sided surfaces)
+    n_sh = shading_side(n_sh, n_geo, V)
     (r, g, b), rays = illuminate(lit, geo, p, n_sh, V, mat_id, seed, pixel, sample, shadows, stack)
     rgb = (r + emit * mat[MAT_EMISSION], g + emit * mat[MAT_EMISSION + 1], b + emit * mat[MAT_EMISSION + 2])
     kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])

@@ -313,6 +313,7 @@ class Mesh(ObjectBase):
     triangulate: bool = True
     _source: Optional[Path] = PrivateAttr(default=None)
     _polygons: Optional[list] = PrivateAttr(default=None)
+    _face_polygon: Optional[np.ndarray] = PrivateAttr(default=None)
 
     @field_validator("vertices", "normals", mode="after")
     @classmethod
@@ -363,9 +364,14 @@ class Mesh(ObjectBase):
                     raise ValueError(f"faces[{i}] refers to a vertex that does not exist (there are {n})")
             from ..mesh import triangulate
 
-            self.faces, _ = triangulate(self.vertices, self._polygons)
+            self.faces, self._face_polygon = triangulate(self.vertices, self._polygons)
         self.check_arrays()
         return self
+
+    @property
+    def face_polygon(self) -> Optional[np.ndarray]:
+        """For polygon faces: the polygon each triangle of `faces` was cut from (None when all are triangles)."""
+        return self._face_polygon
 
     @property
     def polygons(self) -> list:

@@ -1,0 +1,167 @@
+"""Render the before/after figures of docs/methods/raster.md from the scenes in this folder.
+
+    python examples/raster/figures.py    # writes docs/images/raster/*.png: seconds, a minute while Numba compiles
+
+Each figure loads one scene (`lumos.load_scene`), renders it twice or more with one key changed (a mesh key
+set on the loaded scene, or a setting given to `lumos.render`), and puts the renders side by side with a
+caption under each. `sheet.png` is `lumos sheet` of shading.yaml, made with `lumos.sheet.make_sheet`.
+The orientation figure also checks its claim in numbers: it prints the centre pixel of each render.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+import lumos
+from lumos import film
+from lumos.sheet import make_sheet, save_sheet
+
+HERE = Path(__file__).resolve().parent
+OUT = HERE.parents[1] / "docs" / "images" / "raster"
+
+#: Caption strip under each panel, gap between panels, colours (white page, near-black text).
+CAPTION_H, GAP, FONT_SIZE = 26, 6, 15
+PAGE, INK = (255, 255, 255), (25, 25, 25)
+
+
+# ------------------------------------------------------------------------------------------------ helpers
+
+
+def load(name: str):
+    return lumos.load_scene(HERE / name)
+
+
+def shot(scene, **settings) -> np.ndarray:
+    """The render as the PNG would hold it: uint8 (H, W, 3), sRGB after the scene's exposure."""
+    img = lumos.render(scene, **settings)
+    return film.to_png8(img.array, img.exposure)
+
+
+def font():
+    try:
+        return ImageFont.load_default(size=FONT_SIZE)
+    except TypeError:  # Pillow < 10.1: the fixed bitmap font
+        return ImageFont.load_default()
+
+
+def compose(panels: list[tuple[str, np.ndarray]], columns: int) -> Image.Image:
+    """Panels (caption, uint8 image of one size) in a grid, each with its caption centred under it."""
+    h, w = panels[0][1].shape[:2]
+    rows = -(-len(panels) // columns)
+    page = Image.new("RGB", (columns * w + (columns - 1) * GAP, rows * (h + CAPTION_H) + (rows - 1) * GAP), PAGE)
+    draw = ImageDraw.Draw(page)
+    f = font()
+    for i, (caption, pixels) in enumerate(panels):
+        row, col = divmod(i, columns)
+        x, y = col * (w + GAP), row * (h + CAPTION_H + GAP)
+        page.paste(Image.fromarray(np.ascontiguousarray(pixels), mode="RGB"), (x, y))
+        tw = draw.textlength(caption, font=f)
+        draw.text((x + (w - tw) / 2, y + h + (CAPTION_H - FONT_SIZE) / 2 - 1), caption, fill=INK, font=f)
+    return page
+
+
+def save(page: Image.Image, name: str) -> None:
+    path = OUT / name
+    page.save(path, optimize=True)
+    report(path, page)
+
+
+def report(path: Path, page: Image.Image) -> None:
+    print(f"{path.relative_to(HERE.parents[1])}: {page.width}x{page.height}, {path.stat().st_size // 1024} KB")
+
+
+# ------------------------------------------------------------------------------------------------ figures
+
+
+def shading_figure():
+    """Flat, Gouraud and Phong shading of shading.yaml, one above the other."""
+    scene = load("shading.yaml")
+    panels = [(f"shading: {name}", shot(scene, shading=name, width=560, height=280))
+              for name in ("flat", "gouraud", "phong")]
+    save(compose(panels, 1), "shading.png")
+
+
+def sheet_figure():
+    """`lumos sheet examples/raster/shading.yaml --width 320 --height 160`."""
+    sheet, _ = make_sheet(HERE / "shading.yaml", width=320, height=160, title="examples/raster/shading.yaml")
+    report(save_sheet(sheet, OUT / "sheet.png"), sheet)
+
+
+def t_junctions_figure():
+    panels = []
+    for repair in (False, True):
+        scene = load("t_junctions.yaml")
+        scene.objects[0].repair_t_junctions = repair
+        panels.append((f"repair_t_junctions: {str(repair).lower()}", shot(scene, width=320, height=280)))
+    save(compose(panels, 2), "t_junctions.png")
+
+
+def subdivision_figure():
+    panels = []
+    for levels in (0, 3):
+        scene = load("subdivision.yaml")
+        for obj in scene.objects:
+            obj.subdivide = levels
+        panels.append((f"subdivide: {levels}", shot(scene, width=480, height=300)))
+    save(compose(panels, 1), "subdivision.png")
+
+
+def orientation_figure():
+    """2 x 2: triangulate false / true, camera upright / rolled 90 degrees (that render turned back upright,
+    so both show the polygon the same way up). Prints the centre pixel of each."""
+    size = 239  # odd: the centre pixel samples the polygon's centre
+    c = size // 2
+    panels, centres = [], {}
+    for triangulate in (False, True):
+        for rolled in (False, True):
+            scene = load("orientation.yaml")
+            scene.objects[0].triangulate = triangulate
+            scene.camera.up = (1.0, 0.0, 0.0) if rolled else (0.0, 1.0, 0.0)
+            img = lumos.render(scene, width=size, height=size)
+            linear = img.array
+            if rolled:  # up = +x: world +y points left on screen; a quarter turn clockwise puts it back up
+                linear = np.ascontiguousarray(np.rot90(linear, k=-1))
+            centres[triangulate, rolled] = linear
+            camera = "camera rolled 90°" if rolled else "camera upright"
+            caption = f"triangulate: {str(triangulate).lower()}, {camera}"
+            print(f"orientation: {caption:37} centre pixel (linear RGB) "
+                  + ", ".join(f"{v:.4f}" for v in linear[c, c]))
+            panels.append((caption, film.to_png8(linear, img.exposure)))
+    quad = abs(centres[False, True][c, c, 0] - centres[False, False][c, c, 0])
+    tri = np.abs(centres[True, True] - centres[True, False]).max()
+    print(f"orientation: polygon: the centre changes by {quad:.4f} when the camera rolls; "
+          f"triangles: the largest difference over the whole image is {tri:.2e}")
+    save(compose(panels, 2), "orientation.png")
+
+
+def perspective_figure():
+    panels = []
+    for correct in (True, False):
+        scene = load("perspective.yaml")
+        panels.append((f"perspective_correct: {str(correct).lower()}",
+                       shot(scene, perspective_correct=correct, width=480, height=300)))
+    save(compose(panels, 1), "perspective.png")
+
+
+def crease_figure():
+    panels = []
+    for angle in (180, 60):
+        scene = load("crease.yaml")
+        for obj in scene.objects:
+            obj.crease_angle = angle
+        panels.append((f"crease_angle: {angle}", shot(scene, width=480, height=300)))
+    save(compose(panels, 1), "crease.png")
+
+
+def main() -> None:
+    OUT.mkdir(parents=True, exist_ok=True)
+    for make in (shading_figure, sheet_figure, t_junctions_figure, subdivision_figure, orientation_figure,
+                 perspective_figure, crease_figure):
+        make()
+
+
+if __name__ == "__main__":
+    main()
