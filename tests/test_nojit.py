@@ -25,7 +25,7 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 FILES = ["test_rng.py", "test_sampling.py", "test_intersect.py", "test_bvh.py", "test_illumination.py",
-         "test_raycast.py"]
+         "test_raycast.py", "test_raster.py"]
 MIN_PASSED = 40
 
 

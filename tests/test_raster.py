@@ -124,6 +124,7 @@ def grid_mesh(nx, ny, x0, y0, cell, rng, jitter=0.0):
     return V, faces
 
 
+@pytest.mark.nojit
 @pytest.mark.parametrize("jitter", [0.0, 1.3])
 def test_shared_edges_leave_no_crack_and_cover_no_sample_twice(rng, jitter):
     # vertices on pixel centres: many samples lie exactly on shared edges and vertices
@@ -180,6 +181,7 @@ TRI = np.array([[-20.0, -15.0, 0.0], [22.0, -10.0, -3.0], [-5.0, 18.0, 2.0]])
 TRI_N = unit(np.array([[-0.3, -0.2, 1.0], [0.4, -0.1, 1.0], [0.0, 0.5, 1.0]]))
 
 
+@pytest.mark.nojit
 @pytest.mark.parametrize("shading", ["flat", "gouraud", "phong"])
 def test_one_triangle_matches_closed_form(shading):
     W, H = 64, 48
