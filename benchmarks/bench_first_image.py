@@ -45,12 +45,12 @@ def lumos_command() -> list[str]:
     return [str(script)] if script.is_file() else [sys.executable, "-m", "lumos"]
 
 
-def render_once(scene: Path, cache: Path, work: Path, width: int, height: int) -> dict:
+def render_once(scene: Path, cache: Path, work: Path, width: int, height: int, method: str) -> dict:
     """Run one `lumos render` process; returns its `--stats` figures plus `wall_s` (the whole process)."""
     out, stats = work / "out.png", work / "stats.json"
     stats.unlink(missing_ok=True)
     cmd = lumos_command() + ["render", str(scene), "-o", str(out), "--width", str(width), "--height", str(height),
-                             "--stats", str(stats), "--quiet"]
+                             "--stats", str(stats), "--quiet", "--method", method]
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
@@ -63,14 +63,14 @@ def render_once(scene: Path, cache: Path, work: Path, width: int, height: int) -
     return figures
 
 
-def measure(scene: Path, width: int, height: int, repeats: int) -> tuple[dict, dict]:
+def measure(scene: Path, width: int, height: int, repeats: int, method: str) -> tuple[dict, dict]:
     """(cold run, best warm run) for one scene, each with its own fresh cache folder."""
     with tempfile.TemporaryDirectory(prefix="lumos-first-image-") as tmp:
         cache, work = Path(tmp) / "numba_cache", Path(tmp) / "work"
         cache.mkdir()
         work.mkdir()
-        cold = render_once(scene, cache, work, width, height)
-        warm = min((render_once(scene, cache, work, width, height) for _ in range(repeats)),
+        cold = render_once(scene, cache, work, width, height, method)
+        warm = min((render_once(scene, cache, work, width, height, method) for _ in range(repeats)),
                    key=lambda f: f["wall_s"])
     return cold, warm
 
@@ -80,6 +80,7 @@ def main():
     ap.add_argument("--width", type=int, default=320)
     ap.add_argument("--height", type=int, default=240)
     ap.add_argument("--repeats", type=int, default=3, help="warm runs; the best is reported")
+    ap.add_argument("--method", default="raycast", help="rendering method (raycast, raster)")
     args = ap.parse_args()
 
     with tempfile.TemporaryDirectory(prefix="lumos-sphere-") as tmp:
@@ -88,14 +89,15 @@ def main():
         scenes = [("showcase.yaml", ROOT / "examples" / "showcase.yaml"), ("one sphere", sphere)]
         print(f"machine: {machine()}")
         print(f"command: {' '.join(lumos_command())} render SCENE -o out.png --width {args.width} "
-              f"--height {args.height}  (NUMBA_CACHE_DIR: fresh empty folder, then the same folder again)")
+              f"--height {args.height} --method {args.method}  (NUMBA_CACHE_DIR: fresh empty folder, then the same "
+              "folder again)")
         print(f"warm = best of {args.repeats}; load/build/render/startup from the process's own --stats\n")
         header = f"{'scene':<14} {'cache':<5} {'wall s':>7} {'startup':>8} {'load':>6} {'build':>6} {'render':>7}"
         print(header)
         print("-" * len(header))
         ratios = []
         for name, path in scenes:
-            cold, warm = measure(path, args.width, args.height, args.repeats)
+            cold, warm = measure(path, args.width, args.height, args.repeats, args.method)
             for label, f in (("cold", cold), ("warm", warm)):
                 print(f"{name:<14} {label:<5} {f['wall_s']:>7.2f} {f['startup_s']:>8.2f} {f['load_s']:>6.2f} "
                       f"{f['build_s']:>6.2f} {f['render_s']:>7.2f}")
