@@ -77,11 +77,11 @@ def surfaces(arrays, origins, directions):
     for o, d in zip(np.atleast_2d(origins), np.atleast_2d(directions)):
         o = tuple(float(x) for x in o)
         d = tuple(float(x) for x in d)
-        t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, 1e30, stack, stack_t)
+        t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, 1e30, stack, stack_t, 0.0)
         if t < 0.0:
             out.append(None)
             continue
-        p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part)
+        p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
         out.append(dict(t=t, ref=int(ref), part=int(part), p=np.array(p), n_geo=np.array(n_geo),
                         n_sh=np.array(n_sh), u=u, v=v, material=int(mat), object=int(obj), light=int(light)))
     return out

@@ -13,6 +13,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..errors import LumosError
 from ..kernels import layout as L
 from .bvh import build, pack_nodes
 from .meshprep import prepare_mesh
@@ -38,6 +39,7 @@ class _Materials:
     def __init__(self):
         self.rows: list[np.ndarray] = []
         self.index: dict[int, int] = {}
+        self.materials: list = []  # the scene's Material of each row added by `add` (emitters have none)
 
     def add(self, material) -> int:
         key = id(material)
@@ -51,7 +53,11 @@ class _Materials:
             row[L.MAT_KT : L.MAT_KT + 3] = material.kt
             row[L.MAT_IOR] = material.ior
             row[L.MAT_EMISSION : L.MAT_EMISSION + 3] = material.emission
+            row[L.MAT_FRESNEL] = 1.0 if material.fresnel else 0.0
+            row[L.MAT_TEXTURE] = -1.0  # set by the texture step when the material has one
+            row[L.MAT_BUMP] = -1.0
             self.index[key] = len(self.rows)
+            self.materials.append(material)
             self.rows.append(row)
         return self.index[key]
 
@@ -60,7 +66,10 @@ class _Materials:
         row[L.MAT_SHININESS] = 1.0
         row[L.MAT_IOR] = 1.0
         row[L.MAT_EMISSION : L.MAT_EMISSION + 3] = radiance
+        row[L.MAT_TEXTURE] = -1.0
+        row[L.MAT_BUMP] = -1.0
         self.rows.append(row)
+        self.materials.append(None)
         return len(self.rows) - 1
 
     def array(self) -> np.ndarray:
@@ -68,13 +77,33 @@ class _Materials:
 
 
 class _Shapes:
-    def __init__(self):
+    def __init__(self, shutter=(0.0, 0.0)):
         self.xforms, self.infos, self.bounds = [], [], []
+        self.shutter = shutter
 
-    def add(self, kind, world_from_canonical, material, object_id, flags=0, light=-1):
-        self.xforms.append(np.linalg.inv(world_from_canonical)[:3, :4])
-        self.infos.append((kind, material, object_id, flags, light))
-        self.bounds.append(None if kind == L.SHAPE_PLANE else world_bounds(kind, world_from_canonical))
+    def add(self, kind, world_from_canonical, material, object_id, flags=0, light=-1, motion=(0.0, 0.0, 0.0),
+            ref=0, count=0, bounds=None, bounded=True) -> int:
+        """Add a shape; returns its index. `bounds` overrides the canonical shape's (csg nodes); shapes added
+        with `bounded=False` (the solids inside a csg node) stay out of the BVH and the unbounded list."""
+        xform = np.zeros((4, 4))
+        xform[:3, :4] = np.linalg.inv(world_from_canonical)[:3, :4]
+        if any(motion):
+            xform[3, :3] = motion
+            xform[3, 3] = 1.0
+        self.xforms.append(xform)
+        self.infos.append((kind, material, object_id, flags, light, ref, count))
+        if not bounded:
+            self.bounds.append(False)
+        elif kind == L.SHAPE_PLANE:
+            self.bounds.append(None)
+        else:
+            box = world_bounds(kind, world_from_canonical) if bounds is None else np.asarray(bounds, np.float64)
+            if any(motion):  # swept over the shutter interval
+                lo = [box[:3] + tau * np.asarray(motion) for tau in self.shutter]
+                hi = [box[3:] + tau * np.asarray(motion) for tau in self.shutter]
+                box = np.concatenate([np.minimum(*lo), np.maximum(*hi)])
+            self.bounds.append(box)
+        return len(self.infos) - 1
 
 
 def _mesh_triangles(obj, world_from_object):
@@ -155,7 +184,7 @@ def compile_scene(scene, settings=None) -> CompiledScene:
     if settings is not None and settings.method == "raster":
         return _compile_raster(scene, settings)
     materials = _Materials()
-    shapes = _Shapes()
+    shapes = _Shapes(scene.camera.shutter)
     tri_parts = []  # (verts, normals, uvs, material, object)
     names = []
     for object_id, obj in enumerate(scene.objects):
@@ -163,12 +192,20 @@ def compile_scene(scene, settings=None) -> CompiledScene:
         mat = materials.add(scene.material_of(obj))
         world_from_object = None if obj.transform is None else obj.transform.to_matrix()
         if obj.type in ("triangle", "mesh"):
+            if any(obj.motion):
+                raise LumosError(f"objects[{object_id}].motion: {obj.type} objects cannot move (motion blur is "
+                                 "for spheres, boxes, cylinders, cones, disks and csg objects)")
             tri_parts.append((*_mesh_triangles(obj, world_from_object), mat, object_id))
+            continue
+        if obj.type == "csg":
+            from .csg import add_csg
+
+            add_csg(obj, object_id, world_from_object, scene, materials, shapes, tri_parts)
             continue
         kind, object_from_canonical = canonical(obj)
         m = object_from_canonical if world_from_object is None else world_from_object @ object_from_canonical
         flags = L.FLAG_CAPPED if getattr(obj, "capped", False) else 0
-        shapes.add(kind, m, mat, object_id, flags)
+        shapes.add(kind, m, mat, object_id, flags, motion=obj.motion)
     emitters = []
     lights = _lights(scene, materials, emitters)
     for kind, m, mat, i in emitters:
@@ -202,9 +239,9 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
     light_kind, light_samples, light_vecs, light_scalars = lights
     tri_verts, tri_normals, tri_uvs, tri_info = _concat_triangles(tri_parts)
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
-    shape_info = np.array(shapes.infos, dtype=np.int32).reshape(-1, 5)
-    shape_xform = np.array(shapes.xforms, dtype=np.float64).reshape(-1, 3, 4)
-    bounded = [s for s in range(n_shape) if shapes.bounds[s] is not None]
+    shape_info = np.array(shapes.infos, dtype=np.int32).reshape(-1, L.SHAPE_INFO_SIZE)
+    shape_xform = np.array(shapes.xforms, dtype=np.float64).reshape(-1, 4, 4)
+    bounded = [s for s in range(n_shape) if shapes.bounds[s] is not None and shapes.bounds[s] is not False]
     unbounded = np.array([s for s in range(n_shape) if shapes.bounds[s] is None], dtype=np.int32)
 
     # one BVH over triangles and bounded shapes
@@ -246,6 +283,9 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         light_scalars=light_scalars,
         ambient=np.array(scene.ambient, dtype=np.float64),
         background=np.array(scene.background, dtype=np.float64),
+        csg_nodes=np.asarray(getattr(shapes, "csg_nodes", np.zeros((0, 4), np.int32)), np.int32).reshape(-1, 4),
+        tex_info=np.zeros((0, 16)),
+        tex_pixels=np.zeros((0, 3), np.float32),
     )
     if len(prim_bounds):
         bounds = np.array([prim_bounds[:, :3].min(axis=0), prim_bounds[:, 3:].max(axis=0)])

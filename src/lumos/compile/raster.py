@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import mesh as meshops
+from ..errors import LumosError
 from ..kernels import layout as L
 from .meshprep import facet, prepare_mesh
 from .shapes import canonical
@@ -102,6 +103,9 @@ def build_raster_mesh(scene, segments: int, object_materials: list, emitters: li
             w = obj.transform.to_matrix() @ m if obj.transform is not None else m
             analytic_points.append(w[:3, 3])
     for object_id, obj in enumerate(scene.objects):
+        if obj.type == "csg":
+            raise LumosError(f"objects[{object_id}]: csg objects cannot be drawn by raster (scan conversion needs "
+                             "polygons); render them with raycast or whitted")
         mat = object_materials[object_id]
         world_from_object = None if obj.transform is None else obj.transform.to_matrix()
         if obj.type in ("triangle", "mesh"):

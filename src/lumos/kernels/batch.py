@@ -23,7 +23,7 @@ def trace_closest(sa, origins, directions, t_max, t_out, ref_out, b_out):
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
             o = (origins[i, 0], origins[i, 1], origins[i, 2])
             d = (directions[i, 0], directions[i, 1], directions[i, 2])
-            t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, t_max, stack, stack_t)
+            t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, t_max, stack, stack_t, 0.0)
             t_out[i] = t
             ref_out[i] = ref
             b_out[i, 0] = b1
@@ -41,4 +41,4 @@ def trace_any(sa, origins, directions, t_max, hit_out):
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
             o = (origins[i, 0], origins[i, 1], origins[i, 2])
             d = (directions[i, 0], directions[i, 1], directions[i, 2])
-            hit_out[i] = any_hit(geo, o, d, 0.0, t_max[i], stack)
+            hit_out[i] = any_hit(geo, o, d, 0.0, t_max[i], stack, 0.0)

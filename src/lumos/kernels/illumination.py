@@ -122,7 +122,7 @@ def phong(n, L, V, mat, Id, Is, w):
 
 
 @njit
-def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
+def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack, time=0.0):
     """The classic model at point p with unit shading normal n (facing the viewer) and unit V towards the eye.
 
     `lit` is a `layout.Lighting`; `geo` a `layout.Geometry`, for shadow rays. Returns ((r, g, b), shadow rays
@@ -152,7 +152,7 @@ def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
             if shadows:
                 rays += 1
                 origin = madd(p, n, config.RAY_EPSILON * max(1.0, abs(p[0]), abs(p[1]), abs(p[2])))
-                if any_hit(geo, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack):
+                if any_hit(geo, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack, time):
                     continue
             cr, cg, cb = phong(n, L, V, mat, Id, Is, w * inv_n)
             r += cr

@@ -15,6 +15,8 @@ SHAPE_CONE = 3  # x^2 + y^2 = (1 - z)^2, 0 <= z <= 1, apex at z = 1 (cap at z = 
 SHAPE_DISK = 4  # x^2 + y^2 <= 1 in the plane z = 0, normal +z
 SHAPE_RECT = 5  # [0, 1]^2 in the plane z = 0, normal +z (area lights)
 SHAPE_PLANE = 6  # the plane z = 0, normal +z (unbounded)
+SHAPE_CSG = 7  # a csg object: INFO_REF is its root node in csg_nodes (see kernels.csg)
+SHAPE_MESH_SOLID = 8  # a closed mesh inside a csg object: triangles INFO_REF .. INFO_REF + INFO_COUNT - 1
 
 # shape_info / tri_info columns
 INFO_KIND = 0  # shapes only
@@ -22,6 +24,9 @@ INFO_MATERIAL = 1
 INFO_OBJECT = 2
 INFO_FLAGS = 3
 INFO_LIGHT = 4  # area light index for emitter geometry, else -1
+INFO_REF = 5  # shapes: csg root node (SHAPE_CSG) or first triangle (SHAPE_MESH_SOLID)
+INFO_COUNT = 6  # shapes: triangle count (SHAPE_MESH_SOLID)
+SHAPE_INFO_SIZE = 7
 
 FLAG_CAPPED = 1  # shapes: cylinder/cone caps
 FLAG_NORMALS = 1  # triangles: per-vertex shading normals present
@@ -36,7 +41,10 @@ MAT_KR = 10
 MAT_KT = 13
 MAT_IOR = 16
 MAT_EMISSION = 17
-MAT_SIZE = 20
+MAT_FRESNEL = 20  # 1.0: Schlick-weighted reflection and transmission (whitted)
+MAT_TEXTURE = 21  # row in tex_info of the material's texture, or -1
+MAT_BUMP = 22  # row in tex_info of its bump map, or -1
+MAT_SIZE = 24
 
 # Light kinds and columns
 LIGHT_POINT = 0
@@ -80,8 +88,9 @@ SceneArrays = namedtuple(
         "tri_normals",  # float32 (nt, 9): per-vertex shading normals (zeros when absent)
         "tri_uvs",  # float32 (nt, 6): per-vertex uvs (zeros when absent)
         "tri_info",  # int32 (nt, 5): see INFO_*
-        "shape_xform",  # float64 (ns, 3, 4): object_from_world
-        "shape_info",  # int32 (ns, 5): see INFO_*
+        "shape_xform",  # float64 (ns, 4, 4): rows 0-2 object_from_world; row 3 the motion (velocity, world) and
+        # in column 3 a 1.0 when the shape moves (its object space at time τ is object_from_world(p − τ·motion))
+        "shape_info",  # int32 (ns, SHAPE_INFO_SIZE): see INFO_*
         "prim_ref",  # int32 (np,): BVH leaf order -> triangle (>= 0) or ~shape (< 0)
         "node_box",  # float32 (nn, 8): min xyz, max xyz in columns 0-5 (columns 6-7 hold the link bits)
         "node_link",  # int32 (nn, 8): an int32 view of node_box; columns NODE_FIRST, NODE_COUNT
@@ -93,6 +102,9 @@ SceneArrays = namedtuple(
         "light_scalars",  # float64 (nl, 5)
         "ambient",  # float64 (3,)
         "background",  # float64 (3,)
+        "csg_nodes",  # int32 (nc, 4): see kernels.csg
+        "tex_info",  # float64 (nx, TEX_SIZE): textures and bump maps, see kernels.texture
+        "tex_pixels",  # float32 (npx, 3): every image texture's texels, row after row, one after another
     ],
 )
 
@@ -103,7 +115,8 @@ SceneArrays = namedtuple(
 
 #: What traversal needs (closest_hit, any_hit).
 Geometry = namedtuple(
-    "Geometry", ["node_box", "node_link", "prim_ref", "tri_verts", "shape_xform", "shape_info", "unbounded"]
+    "Geometry",
+    ["node_box", "node_link", "prim_ref", "tri_verts", "shape_xform", "shape_info", "unbounded", "csg_nodes"],
 )
 #: What turns a hit into a surface (surface_at).
 Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_info", "shape_xform", "shape_info"])
@@ -111,3 +124,5 @@ Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_i
 Lighting = namedtuple(
     "Lighting", ["materials", "ambient", "light_kind", "light_samples", "light_vecs", "light_scalars"]
 )
+#: What texture lookups read (kernels.texture).
+Textures = namedtuple("Textures", ["tex_info", "tex_pixels"])

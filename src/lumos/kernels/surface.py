@@ -62,7 +62,7 @@ def _canonical_normal_uv(kind, part, p):
 
 
 @njit
-def surface_at(surf, o, d, t, ref, b1, b2, part):
+def surface_at(surf, o, d, t, ref, b1, b2, part, time):
     """Returns (p, n_geometric, n_shading, u, v, material_id, object_id, light_id) for a hit (`surf` is a
     `layout.Surfaces`).
 
@@ -96,7 +96,10 @@ def surface_at(surf, o, d, t, ref, b1, b2, part):
     s = ~ref
     info = surf.shape_info[s]
     m = surf.shape_xform[s]
-    n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], part, xform_point(m, p))
+    q = p
+    if m[3, 3] != 0.0:  # a moving shape, displaced by time·motion
+        q = (p[0] - time * m[3, 0], p[1] - time * m[3, 1], p[2] - time * m[3, 2])
+    n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], part, xform_point(m, q))
     n = normalize(xform_normal(m, n_obj))
     return p, n, n, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]
 

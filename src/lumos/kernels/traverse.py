@@ -13,14 +13,17 @@ from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST
 
 
 @njit
-def _shape_hit(geo, s, o, d, t_min, t_max):
+def _shape_hit(geo, s, o, d, t_min, t_max, time):
     info = geo.shape_info[s]
-    return intersect_shape(info[INFO_KIND], info[INFO_FLAGS] & FLAG_CAPPED, geo.shape_xform[s], o, d, t_min, t_max)
+    m = geo.shape_xform[s]
+    if m[3, 3] != 0.0:  # a moving shape: at `time` it is displaced by time·motion, so the ray moves back
+        o = (o[0] - time * m[3, 0], o[1] - time * m[3, 1], o[2] - time * m[3, 2])
+    return intersect_shape(info[INFO_KIND], info[INFO_FLAGS] & FLAG_CAPPED, m, o, d, t_min, t_max)
 
 
 @njit
-def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
-    """Nearest intersection with t_min < t < t_max; `geo` is a `layout.Geometry`.
+def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
+    """Nearest intersection with t_min < t < t_max at shutter time `time`; `geo` is a `layout.Geometry`.
 
     Returns (t, ref, b1, b2, part): ref is a triangle index (>= 0) or ~shape index (< 0); b1, b2 are the
     barycentrics of a triangle hit, part the face of a shape hit. t = -1 when nothing is hit.
@@ -33,7 +36,7 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
     hit = False
     for k in range(geo.unbounded.shape[0]):
         s = np.int64(geo.unbounded[k])
-        t, part = _shape_hit(geo, s, o, d, t_min, best_t)
+        t, part = _shape_hit(geo, s, o, d, t_min, best_t, time)
         if t != NO_HIT:
             best_t, best_ref, best_part, hit = t, ~s, part, True
     box = geo.node_box
@@ -56,7 +59,7 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
                         if t > t_min:
                             best_t, best_ref, best_b1, best_b2, hit = t, r, b1, b2, True
                     else:
-                        t, part = _shape_hit(geo, np.int64(~r), o, d, t_min, best_t)
+                        t, part = _shape_hit(geo, np.int64(~r), o, d, t_min, best_t, time)
                         if t != NO_HIT:
                             best_t, best_ref, best_part, hit = t, r, part, True
             else:
@@ -93,10 +96,10 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t):
 
 
 @njit
-def any_hit(geo, o, d, t_min, t_max, stack):
+def any_hit(geo, o, d, t_min, t_max, stack, time):
     """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
     for k in range(geo.unbounded.shape[0]):
-        t, part = _shape_hit(geo, np.int64(geo.unbounded[k]), o, d, t_min, t_max)
+        t, part = _shape_hit(geo, np.int64(geo.unbounded[k]), o, d, t_min, t_max, time)
         if t != NO_HIT:
             return True
     box = geo.node_box
@@ -120,7 +123,7 @@ def any_hit(geo, o, d, t_min, t_max, stack):
                     if t > t_min:
                         return True
                 else:
-                    t, part = _shape_hit(geo, np.int64(~r), o, d, t_min, t_max)
+                    t, part = _shape_hit(geo, np.int64(~r), o, d, t_min, t_max, time)
                     if t != NO_HIT:
                         return True
         else:

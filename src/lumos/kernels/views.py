@@ -1,12 +1,13 @@
 """Per-stage views of `SceneArrays` (see `layout`): the same arrays, regrouped so each call passes only its own."""
 
 from .jit import njit
-from .layout import Geometry, Lighting, Surfaces
+from .layout import Geometry, Lighting, Surfaces, Textures
 
 
 @njit
 def geometry_of(sa):
-    return Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info, sa.unbounded)
+    return Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info, sa.unbounded,
+                    sa.csg_nodes)
 
 
 @njit
@@ -17,3 +18,8 @@ def surfaces_of(sa):
 @njit
 def lighting_of(sa):
     return Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars)
+
+
+@njit
+def textures_of(sa):
+    return Textures(sa.tex_info, sa.tex_pixels)

@@ -27,7 +27,7 @@ from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
 def shade_hit(surf, lit, geo, o, d, hit, seed, pixel, sample, shadows, stack):
     """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays)."""
     t, ref, b1, b2, part = hit
-    p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part)
+    p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
     mat = lit.materials[mat_id]
     V = mul(d, -1.0)
     # emitted light: two-sided for emissive materials, one-sided for rect and disk area lights
@@ -57,7 +57,7 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
             for s in range(spp):
                 # stage 1: camera ray; stage 2: nearest hit; stage 3: local illumination
                 o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
-                hit = closest_hit(geo, o, d, 0.0, config.T_FAR, stack, stack_t)
+                hit = closest_hit(geo, o, d, 0.0, config.T_FAR, stack, stack_t, 0.0)
                 rays += 1
                 if hit[0] < 0.0:
                     r += sa.background[0]

@@ -64,7 +64,9 @@ def load_scene(source: str | os.PathLike | dict) -> Scene:
         scene = Scene.model_validate(data)
     except ValidationError as exc:
         raise SceneError(format_validation_error(exc, name, lines=lines, data=data)) from None
-    _load_meshes(scene, path.parent if path else Path.cwd(), name, lines)
+    folder = path.parent if path else Path.cwd()
+    _load_meshes(scene, folder, name, lines)
+    _resolve_texture_files(scene, folder, name, lines)
     if path is not None:
         scene._source = path
     return scene
@@ -223,10 +225,37 @@ def _short_tag(tag: str) -> str:
 # --------------------------------------------------------------------------------------------- mesh files
 
 
+def _solids(obj, path: tuple):
+    """(object, key path) of obj and, for a csg node, of every solid under it."""
+    yield obj, path
+    if getattr(obj, "type", None) == "csg":
+        yield from _solids(obj.left, path + ("left",))
+        yield from _solids(obj.right, path + ("right",))
+
+
 def _load_meshes(scene: Scene, folder: Path, name: str, lines: Optional[dict]) -> None:
-    for i, obj in enumerate(scene.objects):
-        if isinstance(obj, Mesh) and obj.file is not None:
-            _load_mesh_file(obj, folder, _where(name, lines, ("objects", i, "file")))
+    for i, top in enumerate(scene.objects):
+        for obj, at in _solids(top, ("objects", i)):
+            if isinstance(obj, Mesh) and obj.file is not None:
+                _load_mesh_file(obj, folder, _where(name, lines, at + ("file",)))
+
+
+def _resolve_texture_files(scene: Scene, folder: Path, name: str, lines: Optional[dict]) -> None:
+    """Image textures and bump maps name files relative to the scene's folder; each must exist."""
+    materials = [(("materials", key), m) for key, m in scene.materials.items()]
+    for i, top in enumerate(scene.objects):
+        for obj, at in _solids(top, ("objects", i)):
+            if obj.material is not None and not isinstance(obj.material, str):
+                materials.append((at + ("material",), obj.material))
+    for at, material in materials:
+        for key in ("texture", "bump"):
+            tex = getattr(material, key)
+            if tex is None or tex.file is None:
+                continue
+            path = (folder / Path(tex.file).expanduser()).resolve()
+            if not path.is_file():
+                raise SceneError(f"{_where(name, lines, at + (key, 'file'))}: no such image file {tex.file!r}")
+            tex._path = path
 
 
 def _load_mesh_file(mesh: Mesh, folder: Path, where: str) -> None:

@@ -41,9 +41,18 @@ class Camera(StrictModel):
     size: Positive = 2.0
     aperture: NonNegative = 0.0
     focus_distance: Optional[Positive] = None
+    #: [open, close] times of the shutter; objects with a `motion` move during it (motion blur)
+    shutter: tuple[Finite, Finite] = (0.0, 0.0)
+
+    @field_validator("shutter", mode="before")
+    @classmethod
+    def _shutter_tuple(cls, v):
+        return tuple(v) if isinstance(v, list) else v
 
     @model_validator(mode="after")
     def _check_basis(self):
+        if self.shutter[1] < self.shutter[0]:
+            raise ValueError("shutter: [open, close] must not close before it opens")
         view = sub(self.position, self.look_at)
         if norm(view) <= 1e-12:
             raise ValueError("position and look_at must differ")
@@ -71,7 +80,7 @@ class Camera(StrictModel):
 
 # ------------------------------------------------------------------------------------------ render settings
 
-AOV_NAMES = ("depth", "normal", "albedo", "object_id")
+AOV_NAMES = ("depth", "normal", "albedo", "object_id", "samples")
 
 
 class RenderSettings(StrictModel):
@@ -86,7 +95,11 @@ class RenderSettings(StrictModel):
     shading: Literal["flat", "gouraud", "phong"] = "phong"
     exposure: Positive = 1.0
     threads: Optional[Annotated[int, Field(ge=1, le=1024)]] = None
-    aov: list[Literal["depth", "normal", "albedo", "object_id"]] = Field(default_factory=list)
+    aov: list[Literal["depth", "normal", "albedo", "object_id", "samples"]] = Field(default_factory=list)
+    # anti-aliasing of the ray methods: `spp` jittered samples (supersample) or the classic adaptive method
+    antialias: Literal["none", "supersample", "adaptive"] = "supersample"
+    adaptive_threshold: Positive = 0.03
+    adaptive_depth: Annotated[int, Field(ge=0, le=6)] = 3
     # scan-line rendering (method: raster)
     perspective_correct: bool = True
     cull_backfaces: bool = False
@@ -119,6 +132,75 @@ class Material(StrictModel):
     kt: Color = (0.0, 0.0, 0.0)
     ior: Positive = 1.0
     emission: Color = (0.0, 0.0, 0.0)
+    #: whitted: weight reflection and transmission by Schlick's approximation of the Fresnel factor
+    fresnel: bool = False
+    texture: Optional["Texture"] = None
+    bump: Optional["Bump"] = None
+
+
+TEXTURE_TARGETS = ("ka", "kd", "ks", "kr")
+
+
+class Texture(StrictModel):
+    """A colour that varies over a surface, looked up at the hit's (u, v), replacing the coefficients named in
+    `apply_to`. `image`: a PNG/JPEG file (relative to the scene file), bilinearly filtered; `checker`,
+    `stripes` (along u) and `noise` (gradient noise, blending `colors`) are procedural."""
+
+    type: Literal["image", "checker", "stripes", "noise"]
+    file: Optional[str] = None
+    colors: tuple[Color, Color] = ((0.9, 0.9, 0.9), (0.1, 0.1, 0.1))
+    #: repeats across the uv square: (u, v) multipliers (a scalar means both)
+    scale: Union[tuple[Positive, Positive], Positive] = 1.0
+    wrap: Literal["repeat", "clamp"] = "repeat"
+    apply_to: list[Literal["ka", "kd", "ks", "kr"]] = Field(default_factory=lambda: ["ka", "kd"])
+    _path: Optional[Path] = PrivateAttr(default=None)
+
+    @field_validator("scale", "colors", mode="before")
+    @classmethod
+    def _tuples(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @model_validator(mode="after")
+    def _check(self):
+        if (self.type == "image") != (self.file is not None):
+            raise ValueError("an image texture needs file (and only an image texture takes one)")
+        if not self.apply_to:
+            raise ValueError("apply_to must name at least one of ka, kd, ks, kr")
+        return self
+
+    @property
+    def uv_scale(self) -> tuple[float, float]:
+        return self.scale if isinstance(self.scale, tuple) else (self.scale, self.scale)
+
+
+class Bump(StrictModel):
+    """Bump mapping: the shading normal tilted by the gradient of a height field over (u, v): an image's
+    luminance or gradient noise, times `strength`."""
+
+    type: Literal["image", "noise"]
+    file: Optional[str] = None
+    scale: Union[tuple[Positive, Positive], Positive] = 1.0
+    strength: Finite = 1.0
+    wrap: Literal["repeat", "clamp"] = "repeat"
+    _path: Optional[Path] = PrivateAttr(default=None)
+
+    @field_validator("scale", mode="before")
+    @classmethod
+    def _tuples(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @model_validator(mode="after")
+    def _check(self):
+        if (self.type == "image") != (self.file is not None):
+            raise ValueError("an image bump map needs file (and only an image bump map takes one)")
+        return self
+
+    @property
+    def uv_scale(self) -> tuple[float, float]:
+        return self.scale if isinstance(self.scale, tuple) else (self.scale, self.scale)
+
+
+Material.model_rebuild()
 
 
 #: The material of an object that names none: a matte light grey.
@@ -199,6 +281,8 @@ class ObjectBase(StrictModel):
     name: Optional[str] = None
     material: Optional[MaterialRef] = None
     transform: Optional[Transform] = None
+    #: velocity: at time τ of the camera's shutter interval the object is moved by τ·motion (motion blur)
+    motion: Vec3 = (0.0, 0.0, 0.0)
 
 
 class Sphere(ObjectBase):
@@ -394,11 +478,34 @@ class Mesh(ObjectBase):
         return 0 if self.faces is None else len(self.faces)
 
 
+class Csg(ObjectBase):
+    """Constructive solid geometry: `op` of two solids (sphere, box, cylinder, cone, closed mesh, or csg).
+    A solid without a material takes the csg node's. `transform` and `motion` apply to the whole node."""
+
+    type: Literal["csg"]
+    op: Literal["union", "intersection", "difference"]
+    left: "Solid"
+    right: "Solid"
+
+    @model_validator(mode="after")
+    def _check(self):
+        for side in ("left", "right"):
+            child = getattr(self, side)
+            if getattr(child, "capped", True) is False:
+                raise ValueError(f"{side}: an uncapped {child.type} is not a solid (set capped: true)")
+            if any(getattr(child, "motion", (0.0, 0.0, 0.0))):
+                raise ValueError(f"{side}: give motion to the csg node, not to its solids")
+        return self
+
+
+Solid = Annotated[Union[Sphere, Box, Cylinder, Cone, Mesh, Csg], Field(discriminator="type")]
+Csg.model_rebuild()
+
 Object = Annotated[
-    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Triangle, Mesh],
+    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Triangle, Mesh, Csg],
     Field(discriminator="type"),
 ]
-OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "triangle", "mesh")
+OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "triangle", "mesh", "csg")
 
 # ---------------------------------------------------------------------------------------------------- lights
 
