@@ -25,7 +25,8 @@ from . import __version__
 from .errors import LumosError
 
 #: render flags that override the scene's `render:` block (argparse dest == setting name).
-SETTING_FLAGS = ("method", "shading", "width", "height", "spp", "max_depth", "seed", "threads", "exposure", "aov")
+SETTING_FLAGS = ("method", "shading", "width", "height", "spp", "max_depth", "seed", "threads", "exposure", "aov",
+                 "antialias")
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -68,11 +69,12 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--height", type=int, metavar="H", help="image height in pixels")
     render.add_argument("--spp", type=int, metavar="N", help="samples per pixel")
     render.add_argument("--max-depth", type=int, metavar="D", help="bounces of secondary rays (0 = none)")
+    render.add_argument("--antialias", metavar="A", help="none, supersample (spp jittered samples) or adaptive")
     render.add_argument("--seed", type=int, metavar="S", help="random seed")
     render.add_argument("--threads", type=int, metavar="T", help="worker threads (default: all cores)")
     render.add_argument("--exposure", type=float, metavar="E", help="exposure multiplier for PNG output")
     render.add_argument("--aov", action="extend", nargs="+", metavar="NAME",
-                        help="also write these buffers beside OUT: depth, normal, albedo, object_id")
+                        help="also write these buffers beside OUT: depth, normal, albedo, object_id, samples")
     render.add_argument("--stats", metavar="FILE.json", help="write timings and ray counts as JSON")
     render.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     render.set_defaults(run=run_render)
