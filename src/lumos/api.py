@@ -20,6 +20,7 @@ from .scene.model import RenderSettings, Scene
 METHODS: dict[str, str] = {
     "raycast": "lumos.methods.raycast:render_raycast",
     "raster": "lumos.methods.raster:render_raster",
+    "whitted": "lumos.methods.whitted:render_whitted",
 }
 
 _SETTING_KEYS = tuple(RenderSettings.model_fields)
@@ -90,6 +91,7 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
         "render_s": t_render - t_build,
         "total_s": t_render - t0,
         "rays": int(film.rays),
+        "primary_rays": int(film.primary_rays),
         "mrays_per_s": film.rays / max(t_render - t_build, 1e-9) / 1e6,
     }
     return Image(film.radiance, aovs=film.aovs, stats=stats, exposure=cfg.exposure)

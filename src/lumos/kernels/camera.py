@@ -25,8 +25,18 @@ def camera_ray(cam_vecs, cam_params, width, height, x, y, sample, spp, seed, pix
         jx, jy = 0.5, 0.5
     else:
         jx, jy = stratified_2d(sample, spp, rand01(seed, pixel, sample, 0), rand01(seed, pixel, sample, 1))
-    sx = 2.0 * (x + jx) / width - 1.0
-    sy = 1.0 - 2.0 * (y + jy) / height
+    lx, ly = 0.5, 0.5
+    if cam_params[CAM_APERTURE] != 0.0:
+        lx, ly = rand01(seed, pixel, sample, 2), rand01(seed, pixel, sample, 3)
+    return camera_ray_at(cam_vecs, cam_params, width, height, x + jx, y + jy, lx, ly)
+
+
+@njit
+def camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly):
+    """The ray through the image point (fx, fy) in pixel units (pixel (x, y) spans [x, x+1) × [y, y+1)), through
+    the point (lx, ly) ∈ [0, 1)² of the lens (mapped onto the aperture disk; unused by a pinhole)."""
+    sx = 2.0 * fx / width - 1.0
+    sy = 1.0 - 2.0 * fy / height
     aspect = width / height
     pos = row3(cam_vecs, 0)
     u = row3(cam_vecs, 1)
@@ -44,6 +54,6 @@ def camera_ray(cam_vecs, cam_params, width, height, x, y, sample, spp, seed, pix
     # thin lens: every ray through the lens meets the pinhole ray on the plane of focus
     cos_axis = -(d[0] * w[0] + d[1] * w[1] + d[2] * w[2])
     focus = madd(pos, d, cam_params[CAM_FOCUS] / cos_axis)
-    lx, ly = concentric_disk(rand01(seed, pixel, sample, 2), rand01(seed, pixel, sample, 3))
-    o = madd(madd(pos, u, aperture * lx), v, aperture * ly)
+    dx, dy = concentric_disk(lx, ly)
+    o = madd(madd(pos, u, aperture * dx), v, aperture * dy)
     return o, normalize(sub(focus, o))

@@ -35,16 +35,31 @@ from .layout import (
     MAT_KA,
     MAT_KD,
     MAT_KS,
+    MAT_KT,
     MAT_SHININESS,
+    FLAG_CAPPED,
+    INFO_FLAGS,
+    INFO_KIND,
+    SHAPE_BOX,
+    SHAPE_CONE,
+    SHAPE_CSG,
+    SHAPE_CYLINDER,
+    SHAPE_MESH_SOLID,
+    SHAPE_SPHERE,
 )
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d
-from .traverse import any_hit
+from .surface import offset_origin, surface_at
+from .traverse import any_hit, closest_hit
 from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
 
 _INV_PI = 1.0 / math.pi
-#: Dimensions of the per-pixel random stream used by light sampling start here (camera/lens use 0..3).
+#: Dimensions of the per-pixel random stream used by light sampling start here (camera/lens use 0..3, time 4).
 DIM_LIGHTS = 16
+#: A shadow ray passes through at most this many transparent surfaces before it counts as blocked.
+MAX_SHADOW_CROSSINGS = 32
+#: Transmittance below which a shadow ray stops (the light is as good as blocked).
+SHADOW_CUTOFF = 1e-4
 
 
 @njit
@@ -108,16 +123,24 @@ def sample_light(lit, j, p, u1, u2):
 @njit
 def phong(n, L, V, mat, Id, Is, w):
     """One light's term of the classic model for unit N, L, V: (Kd·Id·(N·L) + Ks·Is·(R·V)^n)·w, per channel."""
+    kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
+    ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
+    return phong_coeffs(n, L, V, kd, ks, mat[MAT_SHININESS], Id, Is, w)
+
+
+@njit
+def phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w):
+    """`phong` with the coefficients given as (r, g, b) tuples (a textured surface's, which vary per point)."""
     n_dot_l = dot(n, L)
     if n_dot_l <= 0.0 or w == 0.0:
         return 0.0, 0.0, 0.0
     R = madd(mul(L, -1.0), n, 2.0 * n_dot_l)
     r_dot_v = dot(R, V)
-    spec = r_dot_v ** mat[MAT_SHININESS] if r_dot_v > 0.0 else 0.0  # no highlight where R·V <= 0, even for n = 0
+    spec = r_dot_v**shininess if r_dot_v > 0.0 else 0.0  # no highlight where R·V <= 0, even for n = 0
     return (
-        (mat[MAT_KD] * Id[0] * n_dot_l + mat[MAT_KS] * Is[0] * spec) * w,
-        (mat[MAT_KD + 1] * Id[1] * n_dot_l + mat[MAT_KS + 1] * Is[1] * spec) * w,
-        (mat[MAT_KD + 2] * Id[2] * n_dot_l + mat[MAT_KS + 2] * Is[2] * spec) * w,
+        (kd[0] * Id[0] * n_dot_l + ks[0] * Is[0] * spec) * w,
+        (kd[1] * Id[1] * n_dot_l + ks[1] * Is[1] * spec) * w,
+        (kd[2] * Id[2] * n_dot_l + ks[2] * Is[2] * spec) * w,
     )
 
 
@@ -158,4 +181,94 @@ def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack, t
             r += cr
             g += cg
             b += cb
+    return (r, g, b), rays
+
+
+@njit
+def is_solid(surf, ref):
+    """True for hits on closed solids (sphere, box, capped cylinder or cone, csg, mesh solid): shadow and
+    refracted rays enter and leave them. Triangles, planes, disks, rects and open cylinders are surfaces."""
+    if ref >= 0:
+        return False
+    info = surf.shape_info[~ref]
+    kind = info[INFO_KIND]
+    if kind == SHAPE_SPHERE or kind == SHAPE_BOX or kind == SHAPE_CSG or kind == SHAPE_MESH_SOLID:
+        return True
+    if kind == SHAPE_CYLINDER or kind == SHAPE_CONE:
+        return (info[INFO_FLAGS] & FLAG_CAPPED) != 0
+    return False
+
+
+@njit
+def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
+    """What reaches `origin` from a light at `dist` along L: (rgb factor, rays traced). Opaque objects (kt = 0)
+    block; a transparent object multiplies by its kt each time the ray enters it if it is a solid, each time
+    the ray crosses it if it is a surface (DESIGN.md §3: once per transparent object passed through)."""
+    tr, tg, tb = 1.0, 1.0, 1.0
+    o = origin
+    t_max = dist
+    rays = 0
+    for _ in range(MAX_SHADOW_CROSSINGS):
+        rays += 1
+        hit = closest_hit(geo, o, L, 0.0, t_max, stack, stack_t, time)
+        t = hit[0]
+        if t < 0.0:
+            return (tr, tg, tb), rays
+        p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, o, L, t, hit[1], hit[2], hit[3], hit[4], time)
+        if light >= 0:  # the emitting surface of an area light is not an occluder
+            pass
+        else:
+            mat = lit.materials[mat_id]
+            kt0, kt1, kt2 = mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2]
+            if kt0 <= 0.0 and kt1 <= 0.0 and kt2 <= 0.0:
+                return (0.0, 0.0, 0.0), rays
+            if not is_solid(surf, hit[1]) or dot(L, n_geo) < 0.0:
+                tr *= kt0
+                tg *= kt1
+                tb *= kt2
+                if max(tr, tg, tb) < SHADOW_CUTOFF:
+                    return (0.0, 0.0, 0.0), rays
+        # continue just past the hit
+        o = offset_origin(p, n_geo, L, config.RAY_EPSILON)
+        t_max = t_max - t
+        if t_max <= 0.0:
+            break
+    return (tr, tg, tb), rays
+
+
+@njit
+def illuminate_whitted(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, stack, stack_t,
+                       time):
+    """The classic model at p with explicit coefficients (textures) and shadow rays that pass through
+    transparent objects, attenuated by their kt (`shadow_transmittance`). `n` is the shading normal, `n_geo`
+    the geometric normal, both on the viewer's side. Returns ((r, g, b), rays traced)."""
+    amb = lit.ambient
+    r = ka[0] * amb[0]
+    g = ka[1] * amb[1]
+    b = ka[2] * amb[2]
+    rays = 0
+    dim = DIM_LIGHTS
+    for j in range(lit.light_kind.shape[0]):
+        Id = row3(lit.light_vecs[j], LV_DIFFUSE)
+        Is = row3(lit.light_vecs[j], LV_SPECULAR)
+        n_samples = lit.light_samples[j]
+        inv_n = 1.0 / n_samples
+        for s in range(n_samples):
+            u1, u2 = 0.5, 0.5
+            if lit.light_kind[j] > LIGHT_DIRECTIONAL:
+                u1, u2 = stratified_2d(s, n_samples, rand01(seed, pixel, sample, dim), rand01(seed, pixel, sample, dim + 1))
+                dim += 2
+            L, dist, w = sample_light(lit, j, p, u1, u2)
+            if w == 0.0 or dot(n, L) <= 0.0:
+                continue
+            origin = offset_origin(p, n_geo, L, config.RAY_EPSILON)
+            (tr, tg, tb), extra = shadow_transmittance(geo, surf, lit, origin, L, dist * (1.0 - config.RAY_EPSILON),
+                                                       stack, stack_t, time)
+            rays += extra
+            if tr == 0.0 and tg == 0.0 and tb == 0.0:
+                continue
+            cr, cg, cb = phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w * inv_n)
+            r += cr * tr
+            g += cg * tg
+            b += cb * tb
     return (r, g, b), rays

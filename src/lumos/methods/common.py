@@ -18,6 +18,7 @@ class Film:
     aovs: dict = field(default_factory=dict)
     rays: int = 0
     threads: int = 1
+    primary_rays: int = 0  # camera rays (methods that count them apart)
 
 
 def allocate_aovs(height: int, width: int):
