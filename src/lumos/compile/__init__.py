@@ -19,6 +19,7 @@ from .bvh import build, pack_nodes
 from .meshprep import prepare_mesh
 from .raster import RasterMesh, build_raster_mesh
 from .shapes import canonical, frame, rect_canonical, world_bounds
+from .textures import build_textures
 
 
 @dataclass
@@ -241,6 +242,9 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
     shape_info = np.array(shapes.infos, dtype=np.int32).reshape(-1, L.SHAPE_INFO_SIZE)
     shape_xform = np.array(shapes.xforms, dtype=np.float64).reshape(-1, 4, 4)
+    # the triangles of mesh solids inside csg objects follow the BVH's (kernels.csg tests them, not the BVH)
+    solid_tris = _concat_triangles(getattr(shapes, "solid_triangles", []))
+    shape_info[shape_info[:, L.INFO_KIND] == L.SHAPE_MESH_SOLID, L.INFO_REF] += n_tri
     bounded = [s for s in range(n_shape) if shapes.bounds[s] is not None and shapes.bounds[s] is not False]
     unbounded = np.array([s for s in range(n_shape) if shapes.bounds[s] is None], dtype=np.int32)
 
@@ -265,11 +269,12 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
     shape_ids = np.array(bounded, dtype=np.int64)[order[~is_tri] - n_tri] if len(bounded) else np.zeros(0, np.int64)
     prim_ref[~is_tri] = ~shape_ids.astype(np.int32)
 
+    tex_info, tex_pixels = build_textures(materials)  # also fills the rows' MAT_TEXTURE / MAT_BUMP
     arrays = L.SceneArrays(
-        tri_verts=np.ascontiguousarray(tri_verts[tri_order]),
-        tri_normals=np.ascontiguousarray(tri_normals[tri_order]),
-        tri_uvs=np.ascontiguousarray(tri_uvs[tri_order]),
-        tri_info=np.ascontiguousarray(tri_info[tri_order]),
+        tri_verts=np.ascontiguousarray(np.concatenate([tri_verts[tri_order], solid_tris[0]])),
+        tri_normals=np.ascontiguousarray(np.concatenate([tri_normals[tri_order], solid_tris[1]])),
+        tri_uvs=np.ascontiguousarray(np.concatenate([tri_uvs[tri_order], solid_tris[2]])),
+        tri_info=np.ascontiguousarray(np.concatenate([tri_info[tri_order], solid_tris[3]])),
         shape_xform=shape_xform,
         shape_info=shape_info,
         prim_ref=prim_ref,
@@ -284,8 +289,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         ambient=np.array(scene.ambient, dtype=np.float64),
         background=np.array(scene.background, dtype=np.float64),
         csg_nodes=np.asarray(getattr(shapes, "csg_nodes", np.zeros((0, 4), np.int32)), np.int32).reshape(-1, 4),
-        tex_info=np.zeros((0, 16)),
-        tex_pixels=np.zeros((0, 3), np.float32),
+        tex_info=tex_info,
+        tex_pixels=tex_pixels,
     )
     if len(prim_bounds):
         bounds = np.array([prim_bounds[:, :3].min(axis=0), prim_bounds[:, 3:].max(axis=0)])

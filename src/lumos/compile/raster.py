@@ -96,7 +96,7 @@ def build_raster_mesh(scene, segments: int, object_materials: list, emitters: li
     parts = []
     analytic_points = [cam]
     for obj in scene.objects:
-        if obj.type in ("triangle", "mesh"):
+        if obj.type in ("triangle", "mesh", "csg"):
             continue
         if obj.type != "plane":
             kind, m = canonical(obj)

@@ -25,7 +25,7 @@ INFO_OBJECT = 2
 INFO_FLAGS = 3
 INFO_LIGHT = 4  # area light index for emitter geometry, else -1
 INFO_REF = 5  # shapes: csg root node (SHAPE_CSG) or first triangle (SHAPE_MESH_SOLID)
-INFO_COUNT = 6  # shapes: triangle count (SHAPE_MESH_SOLID)
+INFO_COUNT = 6  # shapes: number of solids (SHAPE_CSG) or of triangles (SHAPE_MESH_SOLID)
 SHAPE_INFO_SIZE = 7
 
 FLAG_CAPPED = 1  # shapes: cylinder/cone caps

@@ -1,13 +1,15 @@
 """From a hit record to the surface there: position, geometric and shading normals, UV, material, object.
 
 Normals of analytic shapes come from their canonical form and are carried to world space by the transpose of
-`object_from_world` (the inverse transpose of the placement). Meshes with vertex normals interpolate them.
+`object_from_world` (the inverse transpose of the placement). Meshes with vertex normals interpolate them. A csg
+hit takes the normal of the solid it lies on, turned outward of the combined solid (`_csg_surface`).
 """
 
 import math
 
 import numpy as np
 
+from .csg import csg_leaf
 from .jit import njit
 from .layout import (
     FLAG_NORMALS,
@@ -19,12 +21,14 @@ from .layout import (
     INFO_OBJECT,
     SHAPE_BOX,
     SHAPE_CONE,
+    SHAPE_CSG,
     SHAPE_CYLINDER,
+    SHAPE_MESH_SOLID,
     SHAPE_PLANE,
     SHAPE_RECT,
     SHAPE_SPHERE,
 )
-from .vec import cross, madd, normalize, sub, xform_normal, xform_point
+from .vec import cross, dot, madd, normalize, sub, xform_normal, xform_point
 
 _INV_2PI = 0.5 / math.pi
 
@@ -95,6 +99,8 @@ def surface_at(surf, o, d, t, ref, b1, b2, part, time):
         return p, n_geo, n_sh, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]
     s = ~ref
     info = surf.shape_info[s]
+    if info[INFO_KIND] == SHAPE_CSG:
+        return _csg_surface(surf, p, d, b1, b2, part, time, info[INFO_OBJECT])
     m = surf.shape_xform[s]
     q = p
     if m[3, 3] != 0.0:  # a moving shape, displaced by time·motion
@@ -102,6 +108,49 @@ def surface_at(surf, o, d, t, ref, b1, b2, part, time):
     n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], part, xform_point(m, q))
     n = normalize(xform_normal(m, n_obj))
     return p, n, n, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]
+
+
+@njit
+def _csg_surface(surf, p, d, b1, b2, part, time, object_id):
+    """The surface at a csg hit (record: see `kernels.csg`): the normal, uv and material of the solid hit, the
+    normal turned outward of the combined solid: against d where the ray enters it (b1 > 0), along d where it
+    leaves. So the cut face of a difference shows the subtracted solid's surface turned inward."""
+    leaf, leaf_part = csg_leaf(part)
+    info = surf.shape_info[leaf]
+    m = surf.shape_xform[leaf]
+    q = p
+    if m[3, 3] != 0.0:  # the csg node moves: its solids are where they were at time 0 displaced by time·motion
+        q = (p[0] - time * m[3, 0], p[1] - time * m[3, 1], p[2] - time * m[3, 2])
+    if info[INFO_KIND] == SHAPE_MESH_SOLID:
+        n, u, w = _triangle_at(surf, np.int64(b2), q)
+    else:
+        n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], leaf_part, xform_point(m, q))
+        n = normalize(xform_normal(m, n_obj))
+    if (dot(n, d) > 0.0) == (b1 > 0.0):
+        n = (-n[0], -n[1], -n[2])
+    return p, n, n, u, w, info[INFO_MATERIAL], object_id, info[INFO_LIGHT]
+
+
+@njit
+def _triangle_at(surf, i, q):
+    """Unit geometric normal and (u, v) of triangle i at the point q on it: its uvs interpolated when it has
+    them, else the barycentrics (b1, b2) of q, found by least squares on the triangle's plane."""
+    v = surf.tri_verts
+    v0 = (np.float64(v[i, 0]), np.float64(v[i, 1]), np.float64(v[i, 2]))
+    e1 = (v[i, 3] - v0[0], v[i, 4] - v0[1], v[i, 5] - v0[2])
+    e2 = (v[i, 6] - v0[0], v[i, 7] - v0[1], v[i, 8] - v0[2])
+    n = normalize(cross(e1, e2))
+    r = sub(q, v0)
+    d11, d12, d22 = dot(e1, e1), dot(e1, e2), dot(e2, e2)
+    r1, r2 = dot(r, e1), dot(r, e2)
+    det = d11 * d22 - d12 * d12
+    b1 = (d22 * r1 - d12 * r2) / det if det != 0.0 else 0.0
+    b2 = (d11 * r2 - d12 * r1) / det if det != 0.0 else 0.0
+    if surf.tri_info[i, INFO_FLAGS] & FLAG_UVS:
+        uv = surf.tri_uvs
+        b0 = 1.0 - b1 - b2
+        return n, b0 * uv[i, 0] + b1 * uv[i, 2] + b2 * uv[i, 4], b0 * uv[i, 1] + b1 * uv[i, 3] + b2 * uv[i, 5]
+    return n, b1, b2
 
 
 @njit

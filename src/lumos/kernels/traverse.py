@@ -2,23 +2,29 @@
 
 Children are stored next to each other: at an interior node both child boxes are tested, the nearer is visited
 first and the farther pushed with its entry distance, so a popped node is skipped once a closer hit is known.
-Unbounded shapes (planes) are tested before the tree.
+Unbounded shapes (planes) are tested before the tree. A csg object is one shape whose test (`kernels.csg`) also
+fills b1 and b2 of the hit record.
 """
 
 import numpy as np
 
+from .csg import intersect_csg
 from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
 from .jit import njit
-from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST
+from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST, SHAPE_CSG
 
 
 @njit
 def _shape_hit(geo, s, o, d, t_min, t_max, time):
+    """(t, part, b1, b2) of shape s; b1 and b2 are 0 except for csg objects (see `kernels.csg`)."""
     info = geo.shape_info[s]
     m = geo.shape_xform[s]
     if m[3, 3] != 0.0:  # a moving shape: at `time` it is displaced by time·motion, so the ray moves back
         o = (o[0] - time * m[3, 0], o[1] - time * m[3, 1], o[2] - time * m[3, 2])
-    return intersect_shape(info[INFO_KIND], info[INFO_FLAGS] & FLAG_CAPPED, m, o, d, t_min, t_max)
+    if info[INFO_KIND] == SHAPE_CSG:  # its solids share its motion: they see the same moved origin
+        return intersect_csg(geo, s, o, d, t_min, t_max)
+    t, part = intersect_shape(info[INFO_KIND], info[INFO_FLAGS] & FLAG_CAPPED, m, o, d, t_min, t_max)
+    return t, part, 0.0, 0.0
 
 
 @njit
@@ -26,7 +32,8 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     """Nearest intersection with t_min < t < t_max at shutter time `time`; `geo` is a `layout.Geometry`.
 
     Returns (t, ref, b1, b2, part): ref is a triangle index (>= 0) or ~shape index (< 0); b1, b2 are the
-    barycentrics of a triangle hit, part the face of a shape hit. t = -1 when nothing is hit.
+    barycentrics of a triangle hit, part the face of a shape hit (csg hits: see `kernels.csg`). t = -1 when
+    nothing is hit.
     """
     best_t = t_max
     best_ref = 0
@@ -36,9 +43,9 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     hit = False
     for k in range(geo.unbounded.shape[0]):
         s = np.int64(geo.unbounded[k])
-        t, part = _shape_hit(geo, s, o, d, t_min, best_t, time)
+        t, part, b1, b2 = _shape_hit(geo, s, o, d, t_min, best_t, time)
         if t != NO_HIT:
-            best_t, best_ref, best_part, hit = t, ~s, part, True
+            best_t, best_ref, best_b1, best_b2, best_part, hit = t, ~s, b1, b2, part, True
     box = geo.node_box
     link = geo.node_link
     if box.shape[0] > 0:
@@ -59,9 +66,9 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
                         if t > t_min:
                             best_t, best_ref, best_b1, best_b2, hit = t, r, b1, b2, True
                     else:
-                        t, part = _shape_hit(geo, np.int64(~r), o, d, t_min, best_t, time)
+                        t, part, b1, b2 = _shape_hit(geo, np.int64(~r), o, d, t_min, best_t, time)
                         if t != NO_HIT:
-                            best_t, best_ref, best_part, hit = t, r, part, True
+                            best_t, best_ref, best_b1, best_b2, best_part, hit = t, r, b1, b2, part, True
             else:
                 # interior: visit the nearer child, push the farther
                 c = np.int64(link[node, NODE_FIRST])
@@ -99,7 +106,7 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
 def any_hit(geo, o, d, t_min, t_max, stack, time):
     """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
     for k in range(geo.unbounded.shape[0]):
-        t, part = _shape_hit(geo, np.int64(geo.unbounded[k]), o, d, t_min, t_max, time)
+        t, part, b1, b2 = _shape_hit(geo, np.int64(geo.unbounded[k]), o, d, t_min, t_max, time)
         if t != NO_HIT:
             return True
     box = geo.node_box
@@ -123,7 +130,7 @@ def any_hit(geo, o, d, t_min, t_max, stack, time):
                     if t > t_min:
                         return True
                 else:
-                    t, part = _shape_hit(geo, np.int64(~r), o, d, t_min, t_max, time)
+                    t, part, b1, b2 = _shape_hit(geo, np.int64(~r), o, d, t_min, t_max, time)
                     if t != NO_HIT:
                         return True
         else:
