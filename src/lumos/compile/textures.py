@@ -1,0 +1,112 @@
+"""Materials' textures and bump maps → `tex_info` rows and one `tex_pixels` buffer (layout: `kernels.texture`).
+
+    tex_info, tex_pixels = build_textures(materials)   # also sets each row's MAT_TEXTURE / MAT_BUMP
+
+Images are read once each with Pillow (two materials naming the same file share its texels). A colour texture
+is decoded from sRGB to linear RGB (`film.srgb_decode`); a bump map is data, not colour: its height is the
+Rec. 709 luminance of the file's raw values scaled to [0, 1], not decoded. Rows are stored bottom row first.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import LumosError
+from ..kernels import layout as L
+from ..kernels import texture as T
+
+_KINDS = {"image": T.TEXTURE_IMAGE, "checker": T.TEXTURE_CHECKER, "stripes": T.TEXTURE_STRIPES,
+          "noise": T.TEXTURE_NOISE}
+_WRAPS = {"repeat": T.WRAP_REPEAT, "clamp": T.WRAP_CLAMP}
+_APPLY = {"ka": T.APPLY_KA, "kd": T.APPLY_KD, "ks": T.APPLY_KS, "kr": T.APPLY_KR}
+#: Rec. 709 / sRGB luminance weights
+_LUMA = np.array([0.2126, 0.7152, 0.0722])
+
+
+def build_textures(materials) -> tuple[np.ndarray, np.ndarray]:
+    """Texture table of a `compile._Materials`: (tex_info float64 (n, TEX_SIZE), tex_pixels float32 (m, 3)).
+
+    Writes the tex_info row of each material's texture and bump map (or -1) into its MAT_TEXTURE and MAT_BUMP
+    columns, in place in `materials.rows`, so call it before `materials.array()`.
+    """
+    table = _Table()
+    for row, material in zip(materials.rows, materials.materials):
+        if material is None:  # an area light's emitter
+            continue
+        row[L.MAT_TEXTURE] = -1.0 if material.texture is None else table.add(material.texture, bump=False)
+        row[L.MAT_BUMP] = -1.0 if material.bump is None else table.add(material.bump, bump=True)
+    return table.arrays()
+
+
+class _Table:
+    def __init__(self):
+        self.infos: list[np.ndarray] = []
+        self.rows: dict[int, int] = {}  # id(texture model) -> tex_info row
+        self.images: dict[tuple[Path, bool], tuple[int, int, int]] = {}  # (path, bump) -> offset, width, height
+        self.pixels: list[np.ndarray] = []
+        self.n_pixels = 0
+
+    def add(self, tex, bump: bool) -> int:
+        key = id(tex)
+        if key in self.rows:
+            return self.rows[key]
+        info = np.zeros(T.TEX_SIZE)
+        info[T.TEX_KIND] = _KINDS[tex.type]
+        info[T.TEX_SCALE_U], info[T.TEX_SCALE_V] = tex.uv_scale
+        info[T.TEX_WRAP] = _WRAPS[tex.wrap]
+        if bump:  # black to white: channel 0 of the lookup is the height
+            info[T.TEX_COLOR1 : T.TEX_COLOR1 + 3] = 1.0
+            info[T.TEX_STRENGTH] = tex.strength
+        else:
+            info[T.TEX_COLOR0 : T.TEX_COLOR0 + 3] = tex.colors[0]
+            info[T.TEX_COLOR1 : T.TEX_COLOR1 + 3] = tex.colors[1]
+            info[T.TEX_APPLY] = sum(_APPLY[name] for name in set(tex.apply_to))
+        if tex.type == "image":
+            info[T.TEX_OFFSET], info[T.TEX_WIDTH], info[T.TEX_HEIGHT] = self._image(tex, bump)
+        self.rows[key] = len(self.infos)
+        self.infos.append(info)
+        return self.rows[key]
+
+    def _image(self, tex, bump: bool) -> tuple[int, int, int]:
+        path = tex._path if tex._path is not None else Path(tex.file).expanduser().resolve()
+        key = (path, bump)
+        if key not in self.images:
+            texels = load_texels(path, bump)
+            h, w = texels.shape[:2]
+            self.images[key] = (self.n_pixels, w, h)
+            self.pixels.append(texels[::-1].reshape(-1, 3))  # bottom row first: v = 0 at the bottom
+            self.n_pixels += w * h
+        return self.images[key]
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        info = np.array(self.infos, dtype=np.float64).reshape(-1, T.TEX_SIZE)
+        pixels = np.concatenate(self.pixels) if self.pixels else np.zeros((0, 3))
+        return np.ascontiguousarray(info), np.ascontiguousarray(pixels, dtype=np.float32)
+
+
+def load_texels(path, bump: bool = False) -> np.ndarray:
+    """float32 (H, W, 3) texels of an image file, top row first: linear RGB decoded from sRGB, or for a bump map
+    (`bump=True`) the luminance of the raw values in [0, 1], repeated in all three channels. Alpha is ignored."""
+    from PIL import Image as PILImage
+
+    from ..film import srgb_decode
+
+    try:
+        with PILImage.open(path) as img:
+            img.load()
+            if img.mode in ("I;16", "I;16B", "I;16L", "I"):  # 16-bit greyscale PNG
+                raw = np.asarray(img, dtype=np.float64) / 65535.0
+                raw = np.repeat(np.clip(raw, 0.0, 1.0)[..., None], 3, axis=2)
+            elif img.mode == "F":
+                raw = np.repeat(np.asarray(img, dtype=np.float64)[..., None], 3, axis=2)
+            else:
+                raw = np.asarray(img.convert("RGB"), dtype=np.float64) / 255.0
+    except (OSError, ValueError, SyntaxError) as exc:  # PIL raises all three on bad files
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise LumosError(f"cannot read image {str(path)!r}: {reason}") from None
+    if bump:
+        height = raw @ _LUMA
+        return np.repeat(height[..., None], 3, axis=2).astype(np.float32)
+    return srgb_decode(raw).astype(np.float32)

@@ -1,0 +1,425 @@
+"""Textures, UV derivatives and bump mapping at a hit: what the ray methods call between `surface_at` and the
+illumination model.
+
+    ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)             # texture colour replaces its apply_to set
+    dpdu, dpdv = surface_tangents(surf, ref, part, p, n, time)     # world-space ∂p/∂u, ∂p/∂v
+    n_bumped = bump_normal(tex, mat, u, v, p, n, dpdu, dpdv)        # unit; n itself when there is no bump map
+
+* `tex` is a `layout.Textures` view (`views.textures_of`), `surf` a `layout.Surfaces` view.
+* `mat` is the material's ROW, `materials[material_id]` (float64 (MAT_SIZE,)); its `MAT_TEXTURE` / `MAT_BUMP`
+  columns hold a row of `tex_info` or -1.
+* `u, v` are the hit's surface coordinates from `surface_at`; `p` the world-space hit point (unused by the
+  current 2-D texture kinds; kept for solid textures).
+* `ref, part` are the hit record of `traverse.closest_hit` (triangle index or ~shape, the face hit); `time` the
+  ray's shutter time (moving shapes are displaced by time·motion).
+* `n` is the unit shading normal as `surface_at` returns it (outward on closed shapes), BEFORE `face_forward` /
+  `shading_side`: bumps raise the surface along n. Turn the bumped normal towards the viewer afterwards.
+
+Everything is a tuple of float64; nothing allocates.
+
+## tex_info columns (float64 (n, TEX_SIZE)), one row per texture or bump map
+
+    TEX_KIND       TEXTURE_IMAGE | TEXTURE_CHECKER | TEXTURE_STRIPES | TEXTURE_NOISE
+    TEX_SCALE_U/V  repeats across the uv square: the pattern is looked up at (s, t) = (scale_u·u, scale_v·v)
+    TEX_WRAP       WRAP_REPEAT: (s, t) unbounded, the pattern tiles; WRAP_CLAMP: (u, v) clamped to the uv square
+                   first, so the pattern covers it once (scale times) and its edge extends beyond
+    TEX_COLOR0..+2, TEX_COLOR1..+2   the two colours of checker, stripes and noise (linear RGB); a bump map's
+                   are black and white, so that channel 0 of its `texture_rgb` is its height
+    TEX_OFFSET, TEX_WIDTH, TEX_HEIGHT   image: its first texel in tex_pixels, and its size in texels
+    TEX_APPLY      bit mask of the coefficients the colour replaces: APPLY_KA | APPLY_KD | APPLY_KS | APPLY_KR
+    TEX_STRENGTH   bump maps: the height scale (world units of displacement per unit of height)
+    column 15      unused
+
+tex_pixels: float32 (m, 3). An image of W×H texels occupies rows OFFSET .. OFFSET + W·H − 1, bottom image row
+first: texel (i, j) is `tex_pixels[OFFSET + j·W + i]`, centred at uv ((i + 0.5)/W, (j + 0.5)/H), so v = 0 is the
+bottom of the picture and images appear upright on a sphere's latitude–longitude map and on planar maps.
+Colour textures hold linear RGB (decoded from sRGB at compile time); bump maps hold the Rec. 709 luminance of
+the file's raw (not decoded) values in all three channels, a height in [0, 1].
+
+## Patterns (at the scaled coordinates (s, t))
+
+    image    bilinear between the four nearest texel centres (neighbours wrap under repeat, clamp at the edge)
+    checker  COLOR0 where floor(s) + floor(t) is even, else COLOR1
+    stripes  COLOR0 where floor(s) is even, else COLOR1
+    noise    lerp(COLOR0, COLOR1, x), x = 0.5 + perlin(s, t)/√2 in [0, 1]: 2-D gradient noise (Perlin 2002, with
+             the quintic fade) over unit gradients at multiples of 45° picked by an integer hash of the lattice
+             point, whose magnitude stays below √2/2. The lattice repeats every round(scale) cells, so integer
+             scales tile seamlessly across u = 0 / 1 (the sphere's seam).
+
+## Bump mapping (Blinn 1978, "Simulation of wrinkled surfaces", eq. 4 without the small terms)
+
+The surface is displaced to p' = p + k·h(u, v)·n (k = strength; n unit). To first order its normal is
+
+    N' = σ·(p'_u × p'_v) = A·n + σ·k·(h_u·(n × p_v) − h_v·(n × p_u))
+
+with A = |p_u × p_v| and σ = sign(n·(p_u × p_v)), so that N' stays on n's side whichever way the uv
+parameterisation turns (bumps rise along n). `bump_normal` returns N'/|N'|. The height derivatives h_u, h_v
+are central differences over one texel (images) or 1e-3 of a pattern period (noise).
+"""
+
+import math
+
+import numpy as np
+
+from .csg import csg_leaf
+from .jit import njit
+from .layout import (
+    FLAG_UVS,
+    INFO_FLAGS,
+    INFO_KIND,
+    MAT_BUMP,
+    MAT_KA,
+    MAT_KD,
+    MAT_KR,
+    MAT_KS,
+    MAT_TEXTURE,
+    SHAPE_BOX,
+    SHAPE_CONE,
+    SHAPE_CSG,
+    SHAPE_CYLINDER,
+    SHAPE_DISK,
+    SHAPE_PLANE,
+    SHAPE_RECT,
+    SHAPE_SPHERE,
+)
+from .vec import cross, dot, length, normalize, orthonormal_basis, xform_point
+
+# tex_info columns
+TEX_KIND = 0
+TEX_SCALE_U = 1
+TEX_SCALE_V = 2
+TEX_WRAP = 3
+TEX_COLOR0 = 4
+TEX_COLOR1 = 7
+TEX_OFFSET = 10
+TEX_WIDTH = 11
+TEX_HEIGHT = 12
+TEX_APPLY = 13
+TEX_STRENGTH = 14
+TEX_SIZE = 16
+
+# TEX_KIND values
+TEXTURE_IMAGE = 0
+TEXTURE_CHECKER = 1
+TEXTURE_STRIPES = 2
+TEXTURE_NOISE = 3
+
+# TEX_WRAP values
+WRAP_REPEAT = 0
+WRAP_CLAMP = 1
+
+# TEX_APPLY bits
+APPLY_KA = 1
+APPLY_KD = 2
+APPLY_KS = 4
+APPLY_KR = 8
+
+#: Under clamp, u and v stay below this so that the far edge of the uv square keeps the last cell's colour.
+_CLAMP_MAX = 1.0 - 1e-9
+#: Finite-difference step of a noise height field, as a fraction of one pattern period.
+_NOISE_STEP = 1e-3
+#: Tangents whose cross product is below this fraction of |p_u|·|p_v| (sine of their angle) are degenerate.
+_DEGENERATE_SINE = 1e-9
+_SQRT_HALF = math.sqrt(0.5)
+_TWO_PI = 2.0 * math.pi
+
+# ------------------------------------------------------------------------------------------------ lookups
+
+
+@njit
+def texture_rgb(tex, row, u, v, p):
+    """Linear (r, g, b) of texture `row` of `tex.tex_info` at surface coordinates (u, v) (see the module doc)."""
+    info = tex.tex_info[row]
+    if info[TEX_WRAP] == WRAP_CLAMP:
+        u = min(max(u, 0.0), _CLAMP_MAX)
+        v = min(max(v, 0.0), _CLAMP_MAX)
+    su = info[TEX_SCALE_U]
+    sv = info[TEX_SCALE_V]
+    s = su * u
+    t = sv * v
+    kind = info[TEX_KIND]
+    if kind == TEXTURE_IMAGE:
+        return _bilinear(tex.tex_pixels, info, s, t, su, sv)
+    if kind == TEXTURE_NOISE:
+        x = noise01(s, t, _period(su), _period(sv))
+        y = 1.0 - x
+        c0, c1 = TEX_COLOR0, TEX_COLOR1
+        return (y * info[c0] + x * info[c1], y * info[c0 + 1] + x * info[c1 + 1], y * info[c0 + 2] + x * info[c1 + 2])
+    if kind == TEXTURE_CHECKER:
+        odd = (np.int64(math.floor(s)) + np.int64(math.floor(t))) & 1
+    else:  # stripes
+        odd = np.int64(math.floor(s)) & 1
+    c = TEX_COLOR1 if odd else TEX_COLOR0
+    return info[c], info[c + 1], info[c + 2]
+
+
+@njit
+def _bilinear(pixels, info, s, t, su, sv):
+    """Bilinear filtering between texel centres at scaled coordinates (s, t) (one image per unit square)."""
+    w = np.int64(info[TEX_WIDTH])
+    h = np.int64(info[TEX_HEIGHT])
+    offset = np.int64(info[TEX_OFFSET])
+    x = s * w - 0.5
+    y = t * h - 0.5
+    if info[TEX_WRAP] == WRAP_CLAMP:  # stop at the centres of the first and last texels of the strip
+        x = min(max(x, 0.0), max(su * w - 1.0, 0.0))
+        y = min(max(y, 0.0), max(sv * h - 1.0, 0.0))
+    xf = math.floor(x)
+    yf = math.floor(y)
+    fx = x - xf
+    fy = y - yf
+    i0 = np.int64(xf) % w
+    j0 = np.int64(yf) % h
+    i1 = (i0 + 1) % w
+    j1 = (j0 + 1) % h
+    a = offset + j0 * w
+    b = offset + j1 * w
+    w00 = (1.0 - fx) * (1.0 - fy)
+    w10 = fx * (1.0 - fy)
+    w01 = (1.0 - fx) * fy
+    w11 = fx * fy
+    r = (w00 * np.float64(pixels[a + i0, 0]) + w10 * np.float64(pixels[a + i1, 0])
+         + w01 * np.float64(pixels[b + i0, 0]) + w11 * np.float64(pixels[b + i1, 0]))
+    g = (w00 * np.float64(pixels[a + i0, 1]) + w10 * np.float64(pixels[a + i1, 1])
+         + w01 * np.float64(pixels[b + i0, 1]) + w11 * np.float64(pixels[b + i1, 1]))
+    bl = (w00 * np.float64(pixels[a + i0, 2]) + w10 * np.float64(pixels[a + i1, 2])
+          + w01 * np.float64(pixels[b + i0, 2]) + w11 * np.float64(pixels[b + i1, 2]))
+    return r, g, bl
+
+
+@njit
+def _period(scale):
+    """Lattice period of the noise along one axis: the scale rounded to a whole number of cells (at least 1)."""
+    return max(np.int64(1), np.int64(math.floor(scale + 0.5)))
+
+
+@njit
+def _lattice_dot(ix, iy, dx, dy):
+    """Dot product of the hashed unit gradient at lattice point (ix, iy) (both >= 0) with the offset (dx, dy).
+
+    The hash is integer-only and stays below 2**63, so it gives the same bits compiled and interpreted."""
+    h = (ix * 374761393 + iy * 668265263) & 0xFFFFFFFF
+    h = ((h ^ (h >> 13)) * 1274126177) & 0xFFFFFFFF
+    h = (h ^ (h >> 16)) & 7
+    if h == 0:
+        return dx
+    if h == 1:
+        return _SQRT_HALF * (dx + dy)
+    if h == 2:
+        return dy
+    if h == 3:
+        return _SQRT_HALF * (dy - dx)
+    if h == 4:
+        return -dx
+    if h == 5:
+        return -_SQRT_HALF * (dx + dy)
+    if h == 6:
+        return -dy
+    return _SQRT_HALF * (dx - dy)
+
+
+@njit
+def _fade(x):
+    return x * x * x * (x * (x * 6.0 - 15.0) + 10.0)
+
+
+@njit
+def noise01(s, t, period_s, period_t):
+    """Gradient noise at (s, t), mapped to [0, 1]; the lattice repeats every period_s × period_t cells."""
+    xf = math.floor(s)
+    yf = math.floor(t)
+    dx = s - xf
+    dy = t - yf
+    ix0 = np.int64(xf) % period_s
+    iy0 = np.int64(yf) % period_t
+    ix1 = (ix0 + 1) % period_s
+    iy1 = (iy0 + 1) % period_t
+    n00 = _lattice_dot(ix0, iy0, dx, dy)
+    n10 = _lattice_dot(ix1, iy0, dx - 1.0, dy)
+    n01 = _lattice_dot(ix0, iy1, dx, dy - 1.0)
+    n11 = _lattice_dot(ix1, iy1, dx - 1.0, dy - 1.0)
+    fx = _fade(dx)
+    fy = _fade(dy)
+    a = n00 + fx * (n10 - n00)
+    b = n01 + fx * (n11 - n01)
+    value = 0.5 + _SQRT_HALF * (a + fy * (b - a))
+    return min(max(value, 0.0), 1.0)
+
+
+# ------------------------------------------------------------------------------------------------ material
+
+
+@njit
+def material_coeffs(tex, mat, u, v, p):
+    """(ka, kd, ks, kr), each an RGB tuple: the material row's coefficients, with those named by its texture's
+    apply_to mask replaced by the texture colour at (u, v). No texture: the row's own values."""
+    ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
+    kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
+    ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
+    kr = (mat[MAT_KR], mat[MAT_KR + 1], mat[MAT_KR + 2])
+    row = np.int64(mat[MAT_TEXTURE])
+    if row < 0:
+        return ka, kd, ks, kr
+    color = texture_rgb(tex, row, u, v, p)
+    mask = np.int64(tex.tex_info[row, TEX_APPLY])
+    if mask & APPLY_KA:
+        ka = color
+    if mask & APPLY_KD:
+        kd = color
+    if mask & APPLY_KS:
+        ks = color
+    if mask & APPLY_KR:
+        kr = color
+    return ka, kd, ks, kr
+
+
+@njit
+def bump_normal(tex, mat, u, v, p, n, dpdu, dpdv):
+    """The unit shading normal tilted by the material's bump map at (u, v) (Blinn 1978, see the module doc);
+    n unchanged when the material has none, its strength is 0 or the tangents are degenerate."""
+    row = np.int64(mat[MAT_BUMP])
+    if row < 0:
+        return n
+    info = tex.tex_info[row]
+    strength = info[TEX_STRENGTH]
+    if strength == 0.0:
+        return n
+    if info[TEX_KIND] == TEXTURE_IMAGE:  # one texel
+        du = 1.0 / (info[TEX_SCALE_U] * info[TEX_WIDTH])
+        dv = 1.0 / (info[TEX_SCALE_V] * info[TEX_HEIGHT])
+    else:
+        du = _NOISE_STEP / info[TEX_SCALE_U]
+        dv = _NOISE_STEP / info[TEX_SCALE_V]
+    h_u = (texture_rgb(tex, row, u + du, v, p)[0] - texture_rgb(tex, row, u - du, v, p)[0]) / (2.0 * du)
+    h_v = (texture_rgb(tex, row, u, v + dv, p)[0] - texture_rgb(tex, row, u, v - dv, p)[0]) / (2.0 * dv)
+    c = cross(dpdu, dpdv)
+    area = length(c)
+    if area == 0.0:
+        return n
+    k = strength / area
+    if dot(n, c) < 0.0:
+        k = -k
+    a = cross(n, dpdv)
+    b = cross(n, dpdu)
+    bumped = normalize((n[0] + k * (h_u * a[0] - h_v * b[0]),
+                        n[1] + k * (h_u * a[1] - h_v * b[1]),
+                        n[2] + k * (h_u * a[2] - h_v * b[2])))
+    if bumped[0] == 0.0 and bumped[1] == 0.0 and bumped[2] == 0.0:
+        return n
+    return bumped
+
+
+# ------------------------------------------------------------------------------------------------ tangents
+
+
+@njit
+def surface_tangents(surf, ref, part, p, n, time):
+    """World-space (∂p/∂u, ∂p/∂v) at a hit, for the (u, v) that `surface_at` reports there.
+
+    Triangles: from their uvs when present, else from the barycentric parameterisation (u, v) = (b1, b2).
+    Analytic shapes: the derivative of the canonical shape's uv map (`surface._canonical_normal_uv`) carried to
+    world space by the inverse of `object_from_world`; a csg hit uses the solid it lies on (`csg.csg_leaf`).
+    Degenerate cases (poles, apex, zero-area uv triangles) and mesh solids inside csg objects (the hit record's
+    triangle is not among the arguments) fall back to an orthonormal pair (t, b) around the unit normal n with
+    t × b = n.
+    """
+    if ref >= 0:
+        dpdu, dpdv = _triangle_tangents(surf, ref)
+    else:
+        s = ~ref
+        if surf.shape_info[s, INFO_KIND] == SHAPE_CSG:  # the solid hit inside a csg object
+            s, part = csg_leaf(part)
+        dpdu, dpdv = _shape_tangents(surf, s, part, p, time)
+    c = cross(dpdu, dpdv)
+    scale = length(dpdu) * length(dpdv)
+    if not (length(c) > _DEGENERATE_SINE * scale):  # also catches NaN
+        return orthonormal_basis(normalize(n))
+    return dpdu, dpdv
+
+
+@njit
+def _triangle_tangents(surf, ref):
+    v = surf.tri_verts
+    v0 = (np.float64(v[ref, 0]), np.float64(v[ref, 1]), np.float64(v[ref, 2]))
+    e1 = (np.float64(v[ref, 3]) - v0[0], np.float64(v[ref, 4]) - v0[1], np.float64(v[ref, 5]) - v0[2])
+    e2 = (np.float64(v[ref, 6]) - v0[0], np.float64(v[ref, 7]) - v0[1], np.float64(v[ref, 8]) - v0[2])
+    if (surf.tri_info[ref, INFO_FLAGS] & FLAG_UVS) == 0:
+        return e1, e2  # p = v0 + b1·e1 + b2·e2 and (u, v) = (b1, b2)
+    uv = surf.tri_uvs
+    du1 = np.float64(uv[ref, 2]) - np.float64(uv[ref, 0])
+    dv1 = np.float64(uv[ref, 3]) - np.float64(uv[ref, 1])
+    du2 = np.float64(uv[ref, 4]) - np.float64(uv[ref, 0])
+    dv2 = np.float64(uv[ref, 5]) - np.float64(uv[ref, 1])
+    det = du1 * dv2 - dv1 * du2
+    if det == 0.0:
+        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)  # degenerate: the caller falls back
+    inv = 1.0 / det
+    # e1 = du1·p_u + dv1·p_v and e2 = du2·p_u + dv2·p_v, solved for p_u, p_v
+    dpdu = ((dv2 * e1[0] - dv1 * e2[0]) * inv, (dv2 * e1[1] - dv1 * e2[1]) * inv, (dv2 * e1[2] - dv1 * e2[2]) * inv)
+    dpdv = ((du1 * e2[0] - du2 * e1[0]) * inv, (du1 * e2[1] - du2 * e1[1]) * inv, (du1 * e2[2] - du2 * e1[2]) * inv)
+    return dpdu, dpdv
+
+
+@njit
+def _canonical_tangents(kind, part, q):
+    """Object-space (∂q/∂u, ∂q/∂v) on a canonical shape at q, inverting `surface._canonical_normal_uv`."""
+    if kind == SHAPE_SPHERE:
+        # q = (cos θ sin φ, sin θ, cos θ cos φ) with φ = 2π(u − ½), θ = π(v − ½)
+        q = normalize(q)
+        r = math.sqrt(q[0] * q[0] + q[2] * q[2])
+        if r == 0.0:
+            return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)  # a pole
+        return ((_TWO_PI * q[2], 0.0, -_TWO_PI * q[0]),
+                (-math.pi * q[1] * q[0] / r, math.pi * r, -math.pi * q[1] * q[2] / r))
+    if kind == SHAPE_BOX:
+        axis = part // 2
+        if axis == 0:  # (u, v) = (z, y)
+            return (0.0, 0.0, 1.0), (0.0, 1.0, 0.0)
+        if axis == 1:  # (x, z)
+            return (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
+        return (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)  # (x, y)
+    if kind == SHAPE_CYLINDER or kind == SHAPE_CONE:
+        if part == 1 or part == 2:  # caps: (u, v) = (½ + ½x, ½ + ½y)
+            return (2.0, 0.0, 0.0), (0.0, 2.0, 0.0)
+        # side: φ = 2π(u − ½), (x, y) = ρ(cos φ, sin φ), z = v with ρ = 1 (cylinder) or 1 − z (cone)
+        phi = math.atan2(q[1], q[0])
+        c = math.cos(phi)
+        s = math.sin(phi)
+        if kind == SHAPE_CYLINDER:
+            return (-_TWO_PI * s, _TWO_PI * c, 0.0), (0.0, 0.0, 1.0)
+        rho = 1.0 - q[2]
+        return (-_TWO_PI * rho * s, _TWO_PI * rho * c, 0.0), (-c, -s, 1.0)
+    if kind == SHAPE_RECT or kind == SHAPE_PLANE:
+        return (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+    if kind == SHAPE_DISK:
+        return (2.0, 0.0, 0.0), (0.0, 2.0, 0.0)
+    return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)  # mesh solids and others: the caller falls back
+
+
+@njit
+def _shape_tangents(surf, s, part, p, time):
+    m = surf.shape_xform[s]
+    q = p
+    if m[3, 3] != 0.0:  # a moving shape, displaced by time·motion
+        q = (p[0] - time * m[3, 0], p[1] - time * m[3, 1], p[2] - time * m[3, 2])
+    t_u, t_v = _canonical_tangents(surf.shape_info[s, INFO_KIND], part, xform_point(m, q))
+    # world_from_object's linear part is the inverse of object_from_world's: its columns are the cross products
+    # of the rows of object_from_world over the determinant
+    r0 = (m[0, 0], m[0, 1], m[0, 2])
+    r1 = (m[1, 0], m[1, 1], m[1, 2])
+    r2 = (m[2, 0], m[2, 1], m[2, 2])
+    c0 = cross(r1, r2)
+    c1 = cross(r2, r0)
+    c2 = cross(r0, r1)
+    det = dot(r0, c0)
+    if det == 0.0:
+        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    inv = 1.0 / det
+    return _combine(c0, c1, c2, t_u, inv), _combine(c0, c1, c2, t_v, inv)
+
+
+@njit
+def _combine(c0, c1, c2, t, scale):
+    return ((c0[0] * t[0] + c1[0] * t[1] + c2[0] * t[2]) * scale,
+            (c0[1] * t[0] + c1[1] * t[1] + c2[1] * t[2]) * scale,
+            (c0[2] * t[0] + c1[2] * t[1] + c2[2] * t[2]) * scale)
