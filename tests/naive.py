@@ -616,3 +616,395 @@ def inside_polygon(px, py, xs, ys):
         # a crossing at or left of the point: the point is right of (or on) a left edge
         crossings_left += active & (x_cross <= xs)
     return crossings_left % 2 == 1, near
+
+
+# --------------------------------------------------------------------------------------- Whitted tracing
+#
+# `render_whitted` is the twin of `method="whitted"` (DESIGN.md §3, "Recursion"), written from the rules below and
+# from nothing in lumos. A ray queue is processed level by level (all rays of one depth at once, vectorised over
+# rays); each queued ray carries its pixel, its path weight (per channel) and the ordered tuple of the solids it
+# is inside (innermost last; () = air, index 1). Per level:
+#
+#   1. nearest hit over every object (`closest`); a miss adds weight·background to its pixel;
+#   2. at a hit p with outward geometric normal n_g: V = −d, n = n_g turned to face V; the pixel gets
+#      weight·(emission + Ka·Ia + Σ_lights T·[Kd·Id·max(N·L,0) + Ks·Is·max(R·V,0)^n]/att), T the shadow
+#      transmittance (`shadow_transmittance`);
+#   3. below max_depth: a reflected ray (reflect(d, n), weight·w_r, same media) and a transmitted one (Snell for
+#      solids with η = n1/n2 from the media tuple, straight on through planes, disks and triangles), w_r = kr,
+#      w_t = kt, or with `fresnel` w_r = kr + kt·F, w_t = kt·(1 − F), F Schlick's (F = 1 on total internal
+#      reflection). On total internal reflection the transmitted part takes the mirror direction: it joins the
+#      reflected ray (w_r + w_t, the incident media), which matters only for the cut-off. A child whose path
+#      weight (max over channels) is below WHITTED_CUTOFF is not traced. Children start at p offset by
+#      WHITTED_EPSILON·max(1, |p|∞) along n_g on the side they leave to.
+#
+# Solids are spheres, boxes and capped cylinders and cones (convex, so the nearest hit on a segment tells whether
+# it enters); planes, disks and triangles are surfaces. Only point and directional lights.
+
+#: Origin offset of secondary and shadow rays, relative to max(1, |p|∞).
+WHITTED_EPSILON = 1e-7
+#: A secondary ray whose path weight (max over channels) is below this is not traced.
+WHITTED_CUTOFF = 1e-3
+
+_SOLIDS = ("sphere", "box", "cylinder", "cone")
+_SURFACES = ("plane", "disk", "triangle")
+
+
+def whitted_material_of(scene: dict, obj: dict) -> dict:
+    """`material_of` plus the keys recursion needs: kr, kt, emission (RGB), ior, fresnel."""
+    m = obj["material"]
+    if isinstance(m, str):
+        m = scene["materials"][m]
+    return {
+        **material_of(scene, obj),
+        "kr": _rgb(m.get("kr")),
+        "kt": _rgb(m.get("kt")),
+        "emission": _rgb(m.get("emission")),
+        "ior": float(m.get("ior", 1.0)),
+        "fresnel": bool(m.get("fresnel", False)),
+    }
+
+
+def is_solid(obj: dict) -> bool:
+    """True for the closed convex shapes a ray can be inside of; False for planes, disks and triangles."""
+    kind = obj["type"]
+    if kind in ("cylinder", "cone") and not obj.get("capped", True):
+        raise NotImplementedError("naive whitted: uncapped cylinders and cones are neither solid nor flat")
+    if kind in _SOLIDS:
+        return True
+    if kind in _SURFACES:
+        return False
+    raise NotImplementedError(f"naive whitted: {kind}")
+
+
+def offset_origin(p, n_g, side):
+    """p + side·WHITTED_EPSILON·max(1, |p|∞)·n_g, side = ±1 per ray (the side of n_g the new ray leaves to)."""
+    eps = WHITTED_EPSILON * np.maximum(1.0, np.abs(p).max(axis=1))
+    return p + (np.asarray(side, dtype=np.float64) * eps)[:, None] * n_g
+
+
+def shadow_transmittance(objects, mats, solid, origin, L, dist):
+    """Per-channel transmittance (n, 3) of shadow rays origin + s·L, 0 < s < dist (an array, inf for directional
+    lights). An object with kt = 0 in every channel blocks (0) wherever the segment meets it; a transparent solid
+    multiplies by its kt where the segment ENTERS it (L·n_g < 0; it meets a convex solid's boundary entering at
+    most once, and then first); a transparent surface multiplies by its kt where the segment crosses it."""
+    T = np.ones(origin.shape)
+    for obj, mat, is_sol in zip(objects, mats, solid):
+        t, n_g = hit_object(obj, origin, L, 0.0, dist)
+        hit = np.isfinite(t)
+        if not mat["kt"].any():
+            T[hit] = 0.0
+            continue
+        if is_sol:
+            hit &= _dot(L, n_g) < 0.0
+        T[hit] *= mat["kt"]
+    return T
+
+
+def whitted_local(p, n, V, mat, scene, objects, mats, solid):
+    """Ka·Ia + Σ_lights T·[Kd·Id·max(N·L,0) + Ks·Is·max(R·V,0)^n]/att: `classic_local` one light at a time,
+    each scaled by the shadow transmittance from p (moved off the surface along n, the side of every light
+    with N·L > 0) towards that light."""
+    out = mat["ka"] * _rgb(scene.get("ambient", 0.0)) + np.zeros(p.shape)
+    origin = offset_origin(p, n, np.ones(len(p)))
+    for light in scene.get("lights", []):
+        if light["type"] == "point":
+            to = np.asarray(light["position"], dtype=np.float64) - origin
+            dist = np.linalg.norm(to, axis=1)
+            L = to / dist[:, None]
+        elif light["type"] == "directional":
+            L = np.broadcast_to(-unit(light["direction"]), p.shape).copy()
+            dist = np.full(len(p), np.inf)
+        else:
+            raise NotImplementedError(f"naive whitted: {light['type']} lights")
+        T = shadow_transmittance(objects, mats, solid, origin, L, dist)
+        out += T * classic_local(p, n, V, mat, [light], 0.0)
+    return out
+
+
+def refract_np(d, n, eta):
+    """Snell's law for arrays: (tir (k,), t (k, 3), cos_i, cos_t), n facing the incident side (d·n <= 0),
+    eta = n1/n2 per ray. cos_t = √(1 − η²(1 − cos_i²)); t = η·d + (η·cos_i − cos_t)·n; the mirror direction
+    where tir."""
+    cos_i = -_dot(d, n)
+    sin2_t = eta * eta * np.maximum(0.0, 1.0 - cos_i * cos_i)
+    tir = sin2_t > 1.0
+    cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_t))
+    t = unit(eta[:, None] * d + (eta * cos_i - cos_t)[:, None] * n)
+    mirror = d + 2.0 * cos_i[:, None] * n
+    return tir, np.where(tir[:, None], mirror, t), cos_i, cos_t
+
+
+def schlick_np(cos_i, cos_t, eta, tir):
+    """Schlick (1994): R0 + (1 − R0)(1 − c)^5, R0 = ((1 − η)/(1 + η))², c the cosine on the thinner side
+    (cos_i when η <= 1, cos_t when η > 1); 1 on total internal reflection."""
+    r0 = ((1.0 - eta) / (1.0 + eta)) ** 2
+    c = np.where(eta <= 1.0, cos_i, cos_t)
+    return np.where(tir, 1.0, r0 + (1.0 - r0) * (1.0 - c) ** 5)
+
+
+def _media_leaving(media, x, ior):
+    """Leaving solid x from inside `media` (object indices, innermost last): n1 = ior of the innermost (x when x
+    is innermost; 1 in air), n2 = ior of the innermost of media − x (1 if none); the transmitted ray's media."""
+    n1 = ior[media[-1]] if media else 1.0
+    rest = tuple(m for m in media if m != x)
+    n2 = ior[rest[-1]] if rest else 1.0
+    return n1, n2, rest
+
+
+def _spawn(objects, mats, solid, ior, i, o, d, p, n_g, n, weight, pixel, media):
+    """Children of the rays (all of them hitting object i): reflected and transmitted rays with their weights."""
+    mat = mats[i]
+    k = len(p)
+    tmedia = list(media)
+    if solid[i]:
+        entering = _dot(d, n_g) < 0.0
+        n1, n2 = np.empty(k), np.empty(k)
+        for j in range(k):
+            if entering[j]:
+                n1[j] = ior[media[j][-1]] if media[j] else 1.0
+                n2[j] = ior[i]
+                tmedia[j] = media[j] + (i,)
+            else:
+                n1[j], n2[j], tmedia[j] = _media_leaving(media[j], i, ior)
+        eta = n1 / n2
+        tir, t_dir, cos_i, cos_t = refract_np(d, n, eta)
+    else:
+        if mat["fresnel"] and mat["kt"].any():
+            raise NotImplementedError("naive whitted: fresnel on a transparent plane, disk or triangle")
+        t_dir = d.copy()
+    w_r = np.broadcast_to(mat["kr"], (k, 3))
+    w_t = np.broadcast_to(mat["kt"], (k, 3))
+    if mat["fresnel"] and solid[i]:
+        F = schlick_np(cos_i, cos_t, eta, tir)[:, None]
+        w_r = mat["kr"] + mat["kt"] * F
+        w_t = mat["kt"] * (1.0 - F)
+    if solid[i]:
+        # total internal reflection: the transmitted part joins the reflected ray (one ray, one path weight)
+        w_r = np.where(tir[:, None], w_r + w_t, w_r)
+        w_t = np.where(tir[:, None], 0.0, w_t)
+    r_dir = d - 2.0 * _dot(d, n)[:, None] * n
+    children = []
+    for direction, w, med in ((r_dir, w_r, list(media)), (t_dir, w_t, tmedia)):
+        cw = weight * w
+        keep = cw.max(axis=1) >= WHITTED_CUTOFF
+        if not keep.any():
+            continue
+        side = np.where(_dot(direction, n_g) >= 0.0, 1.0, -1.0)
+        origin = offset_origin(p, n_g, side)
+        kept_media = [m for m, kp in zip(med, keep) if kp]
+        children.append((origin[keep], direction[keep], cw[keep], pixel[keep], kept_media))
+    return children
+
+
+def render_whitted(scene: dict, width: int, height: int, max_depth: int | None = None):
+    """Whitted ray tracing by the book (see the section comment): (H, W, 3) float64 radiance.
+
+    `max_depth` defaults to the scene's `render: max_depth` (5 when absent); a hit at depth k (the primary hit
+    is depth 0) spawns secondary rays only while k < max_depth.
+    """
+    if max_depth is None:
+        max_depth = scene.get("render", {}).get("max_depth", 5)
+    objects = scene["objects"]
+    mats = [whitted_material_of(scene, obj) for obj in objects]
+    solid = [is_solid(obj) for obj in objects]
+    ior = np.array([m["ior"] for m in mats])
+    background = _rgb(scene.get("background", 0.0))
+    o, d = camera_rays(scene.get("camera", {}), width, height)
+    img = np.zeros((width * height, 3))
+    # the queue of one level: origins, directions, path weights, pixel indices, media tuples
+    queue = (o, d, np.ones(o.shape), np.arange(len(o)), [()] * len(o))
+    for depth in range(max_depth + 1):
+        o, d, weight, pixel, media = queue
+        if len(o) == 0:
+            break
+        # stage 1: nearest hits; misses see the background
+        t, idx, n_g = closest(objects, o, d)
+        miss = idx < 0
+        np.add.at(img, pixel[miss], weight[miss] * background)
+        # stage 2: emission + local term with shadow rays, per object hit
+        p = o + np.where(miss, 0.0, t)[:, None] * d
+        V = -d
+        n = np.where((_dot(n_g, V) < 0.0)[:, None], -n_g, n_g)
+        children = []
+        for i in np.unique(idx[~miss]):
+            sel = np.flatnonzero(idx == i)
+            local = mats[i]["emission"] + whitted_local(p[sel], n[sel], V[sel], mats[i], scene, objects, mats, solid)
+            np.add.at(img, pixel[sel], weight[sel] * local)
+            # stage 3: secondary rays, below max_depth
+            if depth < max_depth:
+                children += _spawn(objects, mats, solid, ior, i, o[sel], d[sel], p[sel], n_g[sel], n[sel],
+                                   weight[sel], pixel[sel], [media[j] for j in sel])
+        if not children:
+            break
+        queue = (np.concatenate([c[0] for c in children]), np.concatenate([c[1] for c in children]),
+                 np.concatenate([c[2] for c in children]), np.concatenate([c[3] for c in children]),
+                 [m for c in children for m in c[4]])
+    return img.reshape(height, width, 3)
+
+
+# ------------------------------------------------------------------------------------------ csg solids
+#
+# Constructive solid geometry from the object dicts (scene-file keys), written from the set operations and never
+# through the kernels' layout: `inside_solid` is point membership (closed sets: the boundary counts as inside),
+# `hit_csg` casts rays by enumerating every boundary crossing of every solid with t > 0 (`hit_object` called
+# again from each crossing, or every triangle of a mesh) and testing membership half-way between successive
+# crossings: a crossing is a hit of the combined solid where membership before and after it differ.
+
+
+def _compose(parent, obj):
+    """world_from_object of a solid inside csg nodes: the parents' transforms, then its own."""
+    m = _xform_of(obj)
+    if m is None:
+        return parent
+    return m if parent is None else parent @ m
+
+
+def mesh_world_triangles(obj, world_from_object=None):
+    """(m, 3, 3) world-space triangles of an inline mesh dict (vertices + triangular faces)."""
+    v = np.asarray(obj["vertices"], dtype=np.float64)
+    if world_from_object is not None:
+        v = v @ world_from_object[:3, :3].T + world_from_object[:3, 3]
+    return v[np.asarray(obj["faces"], dtype=np.int64)]
+
+
+#: an arbitrary direction for parity counts (no mesh edge or vertex of a test lies on a ray along it)
+_PARITY_DIR = unit([0.5377, 0.3127, 0.7831])
+
+
+def inside_solid(obj: dict, points, world_from_parent=None):
+    """(n,) bool: which world points lie in the solid `obj` (sphere, box, cylinder, cone, closed mesh or csg)."""
+    points = np.atleast_2d(np.asarray(points, dtype=np.float64))
+    m = _compose(world_from_parent, obj)
+    kind = obj["type"]
+    if kind == "csg":
+        a = inside_solid(obj["left"], points, m)
+        b = inside_solid(obj["right"], points, m)
+        return {"union": a | b, "intersection": a & b, "difference": a & ~b}[obj["op"]]
+    if kind == "mesh":  # the Jordan parity of a ray from each point
+        count = np.zeros(len(points), np.int64)
+        for v0, v1, v2 in mesh_world_triangles(obj, m):
+            t, _, _, _ = hit_triangle(points, _PARITY_DIR, v0, v1, v2)
+            count += np.isfinite(t)
+        return count % 2 == 1
+    q = points if m is None else np.linalg.solve(m[:3, :3], (points - m[:3, 3]).T).T  # object space
+    if kind == "sphere":
+        c = np.asarray(obj.get("center", (0, 0, 0)), dtype=np.float64)
+        return ((q - c) ** 2).sum(axis=1) <= obj.get("radius", 1.0) ** 2
+    if kind == "box":
+        lo = np.asarray(obj.get("min", (-1, -1, -1)), dtype=np.float64)
+        hi = np.asarray(obj.get("max", (1, 1, 1)), dtype=np.float64)
+        return ((q >= lo) & (q <= hi)).all(axis=1)
+    if kind in ("cylinder", "cone"):
+        base = np.asarray(obj.get("base", (0, 0, 0)), dtype=np.float64)
+        top = np.asarray(obj.get("top", (0, 1, 0)), dtype=np.float64)
+        height = np.linalg.norm(top - base)
+        axis = (top - base) / height
+        h = (q - base) @ axis
+        radial = np.linalg.norm(q - base - np.outer(h, axis), axis=1)
+        r = obj.get("radius", 1.0) * (1.0 if kind == "cylinder" else (1.0 - h / height))
+        return (h >= 0.0) & (h <= height) & (radial <= r)
+    raise NotImplementedError(kind)
+
+
+def csg_solids(obj: dict, world_from_parent=None, material=None):
+    """The solids of a csg dict as [(solid dict placed in the world by a `matrix` transform, material)]; a solid
+    without a material takes the nearest csg node's."""
+    m = _compose(world_from_parent, obj)
+    material = obj.get("material") if obj.get("material") is not None else material
+    if obj["type"] == "csg":
+        return csg_solids(obj["left"], m, material) + csg_solids(obj["right"], m, material)
+    placed = {k: v for k, v in obj.items() if k not in ("transform", "material")}
+    if m is not None:
+        placed["transform"] = {"matrix": m.tolist()}
+    return [(placed, material)]
+
+
+def _solid_crossings(solid: dict, o, d, t_max):
+    """Every boundary crossing of one solid with 0 < t < t_max: [(t (n,), normal (n, 3))]."""
+    if solid["type"] == "mesh":
+        out = []
+        for v0, v1, v2 in mesh_world_triangles(solid, _xform_of(solid)):
+            t, nrm, _, _ = hit_triangle(o, d, v0, v1, v2, 0.0, t_max)
+            out.append((t, nrm))
+        return out
+    out = []
+    t_min = np.zeros(len(o))
+    for _ in range(2):  # a convex solid: at most an entry and an exit
+        t, nrm = hit_object(solid, o, d, t_min, t_max)
+        out.append((t, nrm))
+        t_min = t
+    return out
+
+
+def hit_csg(obj: dict, o, d, t_max=np.inf):
+    """Nearest boundary point of a csg dict on rays o + t·d, 0 < t < t_max: (t (n,), inf on a miss; normal (n, 3),
+    the solid's normal turned outward of the combined solid; solid (n,), an index into `csg_solids(obj)`;
+    entering (n,) bool)."""
+    o, d = _arrays(o, d)
+    n = len(o)
+    ts, normals, owners = [], [], []
+    for k, (solid, _) in enumerate(csg_solids(obj)):
+        for t, nrm in _solid_crossings(solid, o, d, np.inf):
+            ts.append(t)
+            normals.append(nrm)
+            owners.append(np.full(n, k))
+    T = np.stack(ts, axis=1)
+    order = np.argsort(T, axis=1)
+    T = np.take_along_axis(T, order, axis=1)
+    N = np.take_along_axis(np.stack(normals, axis=1), order[:, :, None], axis=1)
+    K = np.take_along_axis(np.stack(owners, axis=1), order, axis=1)
+    used = max(1, int(np.isfinite(T).sum(axis=1).max()))  # sorted: the misses (inf) are at the end
+    T, N, K = T[:, :used], N[:, :used], K[:, :used]
+    # membership half-way along each segment (segment k ends at crossing k); beyond the last crossing: outside
+    inside = np.zeros((n, T.shape[1] + 1), bool)
+    prev = np.zeros(n)
+    for k in range(T.shape[1]):
+        live = np.isfinite(T[:, k])
+        mid = np.where(live, 0.5 * (prev + T[:, k]), 0.0)
+        inside[:, k] = live & inside_solid(obj, o + mid[:, None] * d)
+        prev = np.where(live, T[:, k], prev)
+    change = (inside[:, :-1] != inside[:, 1:]) & np.isfinite(T) & (T < t_max)
+    first = np.argmax(change, axis=1)
+    rows = np.arange(n)
+    hit = change[rows, first]
+    t = np.where(hit, T[rows, first], np.inf)
+    entering = hit & inside[rows, first + 1]
+    nrm = N[rows, first]
+    towards = np.where(entering, -1.0, 1.0)  # outward: against d entering, along d leaving
+    nrm = nrm * np.where(_dot(nrm, d) * towards < 0.0, -1.0, 1.0)[:, None]
+    return t, nrm, np.where(hit, K[rows, first], -1), entering
+
+
+def render_classic_csg(scene: dict, width: int, height: int):
+    """`render_classic` for scenes that may hold csg objects (each hit shaded with the material of the solid it
+    lies on): (H, W, 3) radiance and (H, W) depth."""
+    o, d = camera_rays(scene.get("camera", {}), width, height)
+    n = len(o)
+    t_best = np.full(n, np.inf)
+    n_best = np.zeros((n, 3))
+    mat_best = np.full(n, -1)
+    materials = []
+    for obj in scene["objects"]:
+        if obj["type"] == "csg":
+            t, nrm, solid, _ = hit_csg(obj, o, d)
+            mats = [material_of(scene, {"material": m}) for _, m in csg_solids(obj)]
+            which = len(materials) + solid
+        else:
+            t, nrm = hit_object(obj, o, d)
+            mats = [material_of(scene, obj)]
+            which = np.full(n, len(materials))
+        materials += mats
+        closer = t < t_best
+        t_best = np.where(closer, t, t_best)
+        n_best = np.where(closer[:, None], nrm, n_best)
+        mat_best = np.where(closer, which, mat_best)
+    img = np.broadcast_to(_rgb(scene.get("background", 0.0)), o.shape).copy()
+    p = o + np.where(np.isfinite(t_best), t_best, 0.0)[:, None] * d
+    V = -d
+    n_best = np.where((_dot(n_best, V) < 0.0)[:, None], -n_best, n_best)
+    for k, mat in enumerate(materials):
+        sel = mat_best == k
+        if sel.any():
+            img[sel] = classic_local(p[sel], n_best[sel], V[sel], mat, scene.get("lights", []),
+                                     scene.get("ambient", 0.0))
+    return img.reshape(height, width, 3), t_best.reshape(height, width)

@@ -153,10 +153,20 @@ def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack, t
     (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on nothing else.
     """
     mat = lit.materials[mat_id]
+    ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
+    kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
+    ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
+    return illuminate_coeffs(lit, geo, p, n, V, ka, kd, ks, mat[MAT_SHININESS], seed, pixel, sample, shadows, stack,
+                             time)
+
+
+@njit
+def illuminate_coeffs(lit, geo, p, n, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack, time):
+    """`illuminate` with the coefficients given as (r, g, b) tuples (a textured surface's, which vary)."""
     amb = lit.ambient
-    r = mat[MAT_KA] * amb[0]
-    g = mat[MAT_KA + 1] * amb[1]
-    b = mat[MAT_KA + 2] * amb[2]
+    r = ka[0] * amb[0]
+    g = ka[1] * amb[1]
+    b = ka[2] * amb[2]
     rays = 0
     dim = DIM_LIGHTS
     for j in range(lit.light_kind.shape[0]):
@@ -177,7 +187,7 @@ def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack, t
                 origin = madd(p, n, config.RAY_EPSILON * max(1.0, abs(p[0]), abs(p[1]), abs(p[2])))
                 if any_hit(geo, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack, time):
                     continue
-            cr, cg, cb = phong(n, L, V, mat, Id, Is, w * inv_n)
+            cr, cg, cb = phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w * inv_n)
             r += cr
             g += cg
             b += cb
@@ -204,10 +214,13 @@ def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
     """What reaches `origin` from a light at `dist` along L: (rgb factor, rays traced). Opaque objects (kt = 0)
     block; a transparent object multiplies by its kt each time the ray enters it if it is a solid, each time
     the ray crosses it if it is a surface (DESIGN.md §3: once per transparent object passed through)."""
+    # most shadow rays reach their light: one any-hit traversal settles those
+    if not any_hit(geo, origin, L, 0.0, dist, stack, time):
+        return (1.0, 1.0, 1.0), 1
     tr, tg, tb = 1.0, 1.0, 1.0
     o = origin
     t_max = dist
-    rays = 0
+    rays = 1
     for _ in range(MAX_SHADOW_CROSSINGS):
         rays += 1
         hit = closest_hit(geo, o, L, 0.0, t_max, stack, stack_t, time)

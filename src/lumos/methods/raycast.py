@@ -13,32 +13,37 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray
-from ..kernels.illumination import illuminate
+from ..kernels.illumination import illuminate_coeffs
 from ..kernels.jit import njit, njit_parallel, prange
-from ..kernels.layout import LIGHT_SPHERE, MAT_EMISSION, MAT_KD
+from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
 from ..kernels.traverse import closest_hit
-from ..kernels.views import geometry_of, lighting_of, surfaces_of
+from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
+from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
 from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
 
 
 @njit
-def shade_hit(surf, lit, geo, o, d, hit, seed, pixel, sample, shadows, stack):
+def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stack):
     """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays)."""
     t, ref, b1, b2, part = hit
     p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
     mat = lit.materials[mat_id]
     V = mul(d, -1.0)
+    ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)  # the material's, or its texture's where it has one
+    if mat[MAT_BUMP] >= 0.0:
+        dpdu, dpdv = surface_tangents(surf, ref, part, p, n_sh, 0.0)
+        n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
     # emitted light: two-sided for emissive materials, one-sided for rect and disk area lights
     emit = 1.0
     if light_id >= 0 and lit.light_kind[light_id] != LIGHT_SPHERE and dot(n_geo, V) < 0.0:
         emit = 0.0
     # the shading normal on the viewer's side of the surface (DESIGN.md §3: two-sided surfaces)
     n_sh = shading_side(n_sh, n_geo, V)
-    (r, g, b), rays = illuminate(lit, geo, p, n_sh, V, mat_id, seed, pixel, sample, shadows, stack)
+    (r, g, b), rays = illuminate_coeffs(lit, geo, p, n_sh, V, ka, kd, ks, mat[MAT_SHININESS], seed, pixel, sample,
+                                        shadows, stack, 0.0)
     rgb = (r + emit * mat[MAT_EMISSION], g + emit * mat[MAT_EMISSION + 1], b + emit * mat[MAT_EMISSION + 2])
-    kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
     return rgb, n_sh, kd, object_id, rays
 
 
@@ -47,7 +52,7 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                   radiance, depth, normal, albedo, object_id, rays_per_row):
     for y in prange(y0, y1):
         # per row: parfor bodies cannot capture a namedtuple built outside them
-        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
+        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         stack = np.empty(config.BVH_STACK, np.int64)
         stack_t = np.empty(config.BVH_STACK)
         rays = 0
@@ -64,7 +69,7 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                     g += sa.background[1]
                     b += sa.background[2]
                     continue
-                rgb, n_sh, kd, obj, extra = shade_hit(surf, lit, geo, o, d, hit, seed, pixel, s, False, stack)
+                rgb, n_sh, kd, obj, extra = shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, s, False, stack)
                 rays += extra
                 r += rgb[0]
                 g += rgb[1]

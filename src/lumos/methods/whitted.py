@@ -35,11 +35,8 @@ from ..kernels.layout import (
     LIGHT_SPHERE,
     MAT_EMISSION,
     MAT_FRESNEL,
+    MAT_BUMP,
     MAT_IOR,
-    MAT_KA,
-    MAT_KD,
-    MAT_KR,
-    MAT_KS,
     MAT_KT,
     MAT_SHININESS,
 )
@@ -47,7 +44,8 @@ from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.traverse import closest_hit
-from ..kernels.views import geometry_of, lighting_of, surfaces_of
+from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
+from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
 
 #: Secondary rays whose path weight (largest channel) is below this are not traced.
@@ -94,7 +92,7 @@ def _push(st_f, st_i, st_mo, st_mi, sp, o, d, w0, w1, w2, depth, n_media, src_mo
 
 
 @njit
-def trace(geo, surf, lit, o, d, time, max_depth, seed, pixel, sample, scratch, background):
+def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scratch, background):
     """Radiance along the camera ray (o, d) at shutter time `time`.
 
     Returns (rgb, rays traced, (t, n_shading, kd, object id) of the primary hit; t = −1 on a miss)."""
@@ -133,6 +131,9 @@ def trace(geo, surf, lit, o, d, time, max_depth, seed, pixel, sample, scratch, b
         mat = lit.materials[mat_id]
         V = (-rd[0], -rd[1], -rd[2])
         entering = n_geo[0] * rd[0] + n_geo[1] * rd[1] + n_geo[2] * rd[2] < 0.0
+        if mat[MAT_BUMP] >= 0.0:
+            dpdu, dpdv = surface_tangents(surf, ref, hit[4], p, n_sh, time)
+            n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
         n_s = shading_side(n_sh, n_geo, V)
         n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
         # emitted light: one-sided for rect and disk area lights
@@ -140,10 +141,7 @@ def trace(geo, surf, lit, o, d, time, max_depth, seed, pixel, sample, scratch, b
             r += w0 * mat[MAT_EMISSION]
             g += w1 * mat[MAT_EMISSION + 1]
             b += w2 * mat[MAT_EMISSION + 2]
-        ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
-        kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
-        ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
-        kr = (mat[MAT_KR], mat[MAT_KR + 1], mat[MAT_KR + 2])
+        ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)  # the material's, or its texture's where it has one
         kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
         if depth == 0:
             aov_t, aov_n, aov_kd, aov_obj = t, n_s, kd, obj
@@ -232,7 +230,7 @@ def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
                  radiance, depth, normal, albedo, object_id, samples, rays_per_row):
     """antialias none / supersample: `spp` camera rays per pixel (the pixel centre when spp is 1)."""
     for y in prange(y0, y1):
-        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
+        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch(max_depth)
         rays = 0
         for x in range(width):
@@ -241,7 +239,7 @@ def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
             for s in range(spp):
                 o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
                 time = _time_of(cam_time, seed, pixel, s)
-                rgb, n, info = trace(geo, surf, lit, o, d, time, max_depth, seed, pixel, s, scratch, sa.background)
+                rgb, n, info = trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, s, scratch, sa.background)
                 rays += n
                 r += rgb[0]
                 g += rgb[1]
@@ -257,13 +255,13 @@ def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
 
 
 @njit
-def _point(geo, surf, lit, cam_vecs, cam_params, cam_time, width, height, fx, fy, seed, key, sample, max_depth,
+def _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, fx, fy, seed, key, sample, max_depth,
            scratch, background):
     """The radiance through image point (fx, fy); `key` and `sample` index its random numbers (lens, time)."""
     lx, ly = rand01(seed, key, sample, 2), rand01(seed, key, sample, 3)
     o, d = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
     time = _time_of(cam_time, seed, key, sample)
-    rgb, n, info = trace(geo, surf, lit, o, d, time, max_depth, seed, key, sample, scratch, background)
+    rgb, n, info = trace(geo, surf, lit, tex, o, d, time, max_depth, seed, key, sample, scratch, background)
     return rgb, n
 
 
@@ -272,12 +270,12 @@ def _corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed
     # rays_per_row here has height + 1 entries, one per row of corners
     """adaptive, stage 1: one ray through every pixel corner (W+1 × H+1 of them, shared by neighbours)."""
     for y in prange(y0, y1):
-        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
+        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch(max_depth)
         rays = 0
         for x in range(width + 1):
             key = y * (width + 1) + x
-            rgb, n = _point(geo, surf, lit, cam_vecs, cam_params, cam_time, width, height, np.float64(x),
+            rgb, n = _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, np.float64(x),
                             np.float64(y), seed, key, 0, max_depth, scratch, sa.background)
             corners[y, x, 0], corners[y, x, 1], corners[y, x, 2] = rgb
             rays += n
@@ -303,7 +301,7 @@ def _adaptive_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, se
     """adaptive, stage 2: each pixel from its corners, its squares cut in four where the corners differ."""
     n_levels = max_level + 1
     for y in prange(y0, y1):
-        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
+        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch(max_depth)
         # a square: x0, y0, size, weight; its corner colours in `col` (4 rows per square, in stack order)
         sq = np.empty((4 * n_levels + 4, 4))
@@ -340,7 +338,7 @@ def _adaptive_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, se
                 pts = ((fx + h, fy), (fx, fy + h), (fx + h, fy + h), (fx + size, fy + h), (fx + h, fy + size))
                 for i in range(5):
                     sample += 1
-                    rgb, n = _point(geo, surf, lit, cam_vecs, cam_params, cam_time, width, height, pts[i][0],
+                    rgb, n = _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, pts[i][0],
                                     pts[i][1], seed, key, sample, max_depth, scratch, sa.background)
                     mid[i, 0], mid[i, 1], mid[i, 2] = rgb
                     rays += n
@@ -383,12 +381,12 @@ def _aov_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, m
               depth, normal, albedo, object_id, rays_per_row):
     """adaptive with AOVs: one more ray through each pixel centre, for the AOVs only."""
     for y in prange(y0, y1):
-        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
+        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch(np.int64(0))
         rays = 0
         for x in range(width):
             o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, 0, 1, seed, y * width + x)
-            rgb, n, info = trace(geo, surf, lit, o, d, cam_time[0], np.int64(0), seed, y * width + x, 0, scratch,
+            rgb, n, info = trace(geo, surf, lit, tex, o, d, cam_time[0], np.int64(0), seed, y * width + x, 0, scratch,
                                  sa.background)
             rays += n
             _store_aovs(x, y, info, depth, normal, albedo, object_id)
