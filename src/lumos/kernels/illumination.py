@@ -40,6 +40,8 @@ from .layout import (
     FLAG_CAPPED,
     INFO_FLAGS,
     INFO_KIND,
+    INFO_LIGHT,
+    INFO_MATERIAL,
     SHAPE_BOX,
     SHAPE_CONE,
     SHAPE_CSG,
@@ -50,7 +52,7 @@ from .layout import (
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d
 from .surface import offset_origin, surface_at
-from .traverse import any_hit, closest_hit
+from .traverse import any_hit, closest_hit, occluder
 from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
 
 _INV_PI = 1.0 / math.pi
@@ -214,9 +216,16 @@ def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
     """What reaches `origin` from a light at `dist` along L: (rgb factor, rays traced). Opaque objects (kt = 0)
     block; a transparent object multiplies by its kt each time the ray enters it if it is a solid, each time
     the ray crosses it if it is a surface (DESIGN.md §3: once per transparent object passed through)."""
-    # most shadow rays reach their light: one any-hit traversal settles those
-    if not any_hit(geo, origin, L, 0.0, dist, stack, time):
+    # one any-hit traversal settles most shadow rays: nothing in the way, or an opaque occluder
+    blocked, ref = occluder(geo, origin, L, 0.0, dist, stack, time)
+    if not blocked:
         return (1.0, 1.0, 1.0), 1
+    info = surf.tri_info[ref] if ref >= 0 else surf.shape_info[~ref]
+    if ref >= 0 or info[INFO_KIND] != SHAPE_CSG:  # a csg object's solids have materials of their own
+        mat = lit.materials[info[INFO_MATERIAL]]
+        if info[INFO_LIGHT] < 0 and mat[MAT_KT] <= 0.0 and mat[MAT_KT + 1] <= 0.0 and mat[MAT_KT + 2] <= 0.0:
+            return (0.0, 0.0, 0.0), 1
+    # something transparent is in the way: walk the hits in order
     tr, tg, tb = 1.0, 1.0, 1.0
     o = origin
     t_max = dist

@@ -103,21 +103,22 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
 
 
 @njit
-def any_hit(geo, o, d, t_min, t_max, stack, time):
-    """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
+def occluder(geo, o, d, t_min, t_max, stack, time):
+    """(True, ref) for some primitive on the ray with t_min < t < t_max (the first the traversal meets, not
+    necessarily the nearest); (False, 0) if there is none. ref as in `closest_hit`."""
     for k in range(geo.unbounded.shape[0]):
         t, part, b1, b2 = _shape_hit(geo, np.int64(geo.unbounded[k]), o, d, t_min, t_max, time)
         if t != NO_HIT:
-            return True
+            return True, ~np.int64(geo.unbounded[k])
     box = geo.node_box
     link = geo.node_link
     if box.shape[0] == 0:
-        return False
+        return False, np.int64(0)
     rb = box_setup(o, d)
     setup = triangle_setup(d)
     node = np.int64(0)
     if intersect_node_box(box, node, rb, t_max) == NO_HIT:
-        return False
+        return False, np.int64(0)
     sp = 0
     while True:
         count = link[node, NODE_COUNT]
@@ -128,11 +129,11 @@ def any_hit(geo, o, d, t_min, t_max, stack, time):
                 if r >= 0:
                     t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)
                     if t > t_min:
-                        return True
+                        return True, np.int64(r)
                 else:
                     t, part, b1, b2 = _shape_hit(geo, np.int64(~r), o, d, t_min, t_max, time)
                     if t != NO_HIT:
-                        return True
+                        return True, np.int64(r)
         else:
             c = np.int64(link[node, NODE_FIRST])
             hit_left = intersect_node_box(box, c, rb, t_max) != NO_HIT
@@ -146,6 +147,12 @@ def any_hit(geo, o, d, t_min, t_max, stack, time):
                 node = c if hit_left else c + 1
                 continue
         if sp == 0:
-            return False
+            return False, np.int64(0)
         sp -= 1
         node = stack[sp]
+
+
+@njit
+def any_hit(geo, o, d, t_min, t_max, stack, time):
+    """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
+    return occluder(geo, o, d, t_min, t_max, stack, time)[0]

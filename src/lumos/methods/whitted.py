@@ -18,8 +18,9 @@ filter; with a thin-lens camera or a shutter interval each sample also takes its
 of field and motion blur), or `adaptive`: the classic method — rays through the pixel corners, shared with the
 neighbours; where the four corners of a square differ by more than `adaptive_threshold` (any channel of the
 displayed, [0, 1]-clamped colour), the square is cut in four through five new rays, down to `adaptive_depth`
-levels; each square's value is the mean of its corners, a pixel's the area-weighted mean of its squares. The
-`samples` AOV holds the number of camera rays each pixel took.
+levels (a point shared by neighbouring squares is traced once); each square's value is the mean of its corners,
+a pixel's the area-weighted mean of its squares. The `samples` AOV holds the number of camera rays each pixel
+took.
 """
 
 from __future__ import annotations
@@ -282,92 +283,81 @@ def _corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed
         rays_per_row[y] += rays
 
 
-@njit
-def _contrast(c, k0, k1, k2, k3):
-    """Largest spread over the channels of the four corners' displayed ([0, 1]-clamped) colours."""
-    worst = 0.0
-    for ch in range(3):
-        a = min(max(c[k0, ch], 0.0), 1.0)
-        b = min(max(c[k1, ch], 0.0), 1.0)
-        e = min(max(c[k2, ch], 0.0), 1.0)
-        f = min(max(c[k3, ch], 0.0), 1.0)
-        worst = max(worst, max(a, b, e, f) - min(a, b, e, f))
-    return worst
-
-
 @njit_parallel
 def _adaptive_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, threshold,
                    max_level, corners, radiance, samples, rays_per_row):
-    """adaptive, stage 2: each pixel from its corners, its squares cut in four where the corners differ."""
-    n_levels = max_level + 1
+    """adaptive, stage 2: each pixel from its corners, its squares cut in four where the corners differ.
+
+    A pixel's points live on a (2^max_level + 1)² grid, so a point shared by neighbouring squares is traced
+    once; `stamp` marks the points already traced for the current pixel."""
+    cells = np.int64(1) << max_level
+    n = cells + 1
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch(max_depth)
-        # a square: x0, y0, size, weight; its corner colours in `col` (4 rows per square, in stack order)
-        sq = np.empty((4 * n_levels + 4, 4))
-        lvl = np.empty(4 * n_levels + 4, np.int64)
-        col = np.empty((4 * (4 * n_levels + 4), 3))
-        mid = np.empty((5, 3))
+        grid = np.empty((n, n, 3))
+        stamp = np.full((n, n), -1, np.int64)
+        stack = np.empty((4 * max_level + 4, 4), np.int64)  # squares: ix, iy, size (in cells), level
         rays = 0
+        inv = 1.0 / cells
         for x in range(width):
-            key = (height + 1) * (width + 1) + y * width + x  # random keys of this pixel's extra points
-            count = 1  # its corner ray
-            sample = 0
-            sq[0, 0], sq[0, 1], sq[0, 2], sq[0, 3] = x, y, 1.0, 1.0
-            lvl[0] = 0
+            pixel = y * width + x
+            key = (height + 1) * (width + 1) + pixel  # random keys of this pixel's extra points
             for ch in range(3):
-                col[0, ch] = corners[y, x, ch]
-                col[1, ch] = corners[y, x + 1, ch]
-                col[2, ch] = corners[y + 1, x, ch]
-                col[3, ch] = corners[y + 1, x + 1, ch]
+                grid[0, 0, ch] = corners[y, x, ch]
+                grid[0, cells, ch] = corners[y, x + 1, ch]
+                grid[cells, 0, ch] = corners[y + 1, x, ch]
+                grid[cells, cells, ch] = corners[y + 1, x + 1, ch]
+            stamp[0, 0] = stamp[0, cells] = stamp[cells, 0] = stamp[cells, cells] = pixel
+            count = 1  # its own corner ray
+            stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = 0, 0, cells, 0
             sp = 1
             r = g = b = 0.0
             while sp > 0:
                 sp -= 1
-                k = 4 * sp
-                fx, fy, size, weight = sq[sp, 0], sq[sp, 1], sq[sp, 2], sq[sp, 3]
-                level = lvl[sp]
-                if level >= max_level or _contrast(col, k, k + 1, k + 2, k + 3) <= threshold:
-                    q = 0.25 * weight
-                    r += q * (col[k, 0] + col[k + 1, 0] + col[k + 2, 0] + col[k + 3, 0])
-                    g += q * (col[k, 1] + col[k + 1, 1] + col[k + 2, 1] + col[k + 3, 1])
-                    b += q * (col[k, 2] + col[k + 1, 2] + col[k + 2, 2] + col[k + 3, 2])
+                ix, iy, size, level = stack[sp, 0], stack[sp, 1], stack[sp, 2], stack[sp, 3]
+                # the four corners, as grid rows (iy) and columns (ix)
+                worst = 0.0
+                for ch in range(3):
+                    c0 = min(max(grid[iy, ix, ch], 0.0), 1.0)
+                    c1 = min(max(grid[iy, ix + size, ch], 0.0), 1.0)
+                    c2 = min(max(grid[iy + size, ix, ch], 0.0), 1.0)
+                    c3 = min(max(grid[iy + size, ix + size, ch], 0.0), 1.0)
+                    worst = max(worst, max(c0, c1, c2, c3) - min(c0, c1, c2, c3))
+                if level >= max_level or worst <= threshold:
+                    q = 0.25 * (size * inv) * (size * inv)  # the mean of the corners, weighted by the area
+                    ex, ey = ix + size, iy + size
+                    r += q * (grid[iy, ix, 0] + grid[iy, ex, 0] + grid[ey, ix, 0] + grid[ey, ex, 0])
+                    g += q * (grid[iy, ix, 1] + grid[iy, ex, 1] + grid[ey, ix, 1] + grid[ey, ex, 1])
+                    b += q * (grid[iy, ix, 2] + grid[iy, ex, 2] + grid[ey, ix, 2] + grid[ey, ex, 2])
                     continue
-                # five new points: top, left, centre, right and bottom middles
-                h = 0.5 * size
-                pts = ((fx + h, fy), (fx, fy + h), (fx + h, fy + h), (fx + size, fy + h), (fx + h, fy + size))
-                for i in range(5):
-                    sample += 1
-                    rgb, n = _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, pts[i][0],
-                                    pts[i][1], seed, key, sample, max_depth, scratch, sa.background)
-                    mid[i, 0], mid[i, 1], mid[i, 2] = rgb
-                    rays += n
-                count += 5
-                # the parent's corners (top-left, top-right, bottom-left, bottom-right) before they are overwritten
-                c00 = (col[k, 0], col[k, 1], col[k, 2])
-                c10 = (col[k + 1, 0], col[k + 1, 1], col[k + 1, 2])
-                c01 = (col[k + 2, 0], col[k + 2, 1], col[k + 2, 2])
-                c11 = (col[k + 3, 0], col[k + 3, 1], col[k + 3, 2])
-                top_m = (mid[0, 0], mid[0, 1], mid[0, 2])
-                left_m = (mid[1, 0], mid[1, 1], mid[1, 2])
-                centre = (mid[2, 0], mid[2, 1], mid[2, 2])
-                right_m = (mid[3, 0], mid[3, 1], mid[3, 2])
-                bottom_m = (mid[4, 0], mid[4, 1], mid[4, 2])
-                children = (
-                    (fx, fy, c00, top_m, left_m, centre),
-                    (fx + h, fy, top_m, c10, centre, right_m),
-                    (fx, fy + h, left_m, centre, c01, bottom_m),
-                    (fx + h, fy + h, centre, right_m, bottom_m, c11),
-                )
-                for i in range(4):
-                    cx, cy, a0, a1, a2, a3 = children[i]
-                    sq[sp, 0], sq[sp, 1], sq[sp, 2], sq[sp, 3] = cx, cy, h, 0.25 * weight
-                    lvl[sp] = level + 1
-                    j = 4 * sp
-                    col[j, 0], col[j, 1], col[j, 2] = a0
-                    col[j + 1, 0], col[j + 1, 1], col[j + 1, 2] = a1
-                    col[j + 2, 0], col[j + 2, 1], col[j + 2, 2] = a2
-                    col[j + 3, 0], col[j + 3, 1], col[j + 3, 2] = a3
+                h = size // 2
+                # the five middles (top, left, centre, right, bottom) that are not traced yet
+                for k in range(5):
+                    if k == 0:
+                        px, py = ix + h, iy
+                    elif k == 1:
+                        px, py = ix, iy + h
+                    elif k == 2:
+                        px, py = ix + h, iy + h
+                    elif k == 3:
+                        px, py = ix + size, iy + h
+                    else:
+                        px, py = ix + h, iy + size
+                    if stamp[py, px] == pixel:
+                        continue
+                    stamp[py, px] = pixel
+                    rgb, nr = _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height,
+                                     x + px * inv, y + py * inv, seed, key, py * n + px, max_depth, scratch,
+                                     sa.background)
+                    grid[py, px, 0], grid[py, px, 1], grid[py, px, 2] = rgb
+                    rays += nr
+                    count += 1
+                for k in range(4):
+                    stack[sp, 0] = ix + (k % 2) * h
+                    stack[sp, 1] = iy + (k // 2) * h
+                    stack[sp, 2] = h
+                    stack[sp, 3] = level + 1
                     sp += 1
             radiance[y, x, 0] = r
             radiance[y, x, 1] = g
