@@ -346,3 +346,16 @@ def test_deterministic_across_threads_and_runs():
     assert diff.any(axis=2).mean() > 0.3  # the area-light noise moved
     lit = a.max(axis=2) > 0.05
     assert other[lit].mean() == pytest.approx(a[lit].mean(), rel=0.02)  # but not the expected value
+
+
+def test_antialias_settings_of_raycast():
+    scene = {"objects": [{"type": "sphere", "material": {"kd": 0.5}}],
+             "lights": [{"type": "directional", "direction": [0, 0, -1]}]}
+    img = render(scene, width=8, height=6, spp=4, aov=["samples"])
+    assert img.stats["primary_rays"] == 8 * 6 * 4 and np.all(img.aovs["samples"] == 4)
+    one = render(scene, width=8, height=6, spp=4, antialias="none")
+    assert one.stats["primary_rays"] == 8 * 6
+    with pytest.raises(lumos.LumosError, match="adaptive"):
+        render(scene, width=8, height=6, antialias="adaptive")
+    with pytest.raises(lumos.LumosError, match="adaptive"):
+        render(scene, method="raster", width=8, height=6, antialias="adaptive")

@@ -108,6 +108,7 @@ class Image:
         normal:    0.5·n + 0.5 (the usual normal-map colours)
         albedo:    as is, clamped to [0, 1]
         object_id: a fixed colour per id from a hash palette (`id_colors`)
+        samples:   the count divided by the largest, grey (background included)
         others:    (H, W) values divided by their largest finite value, grey; (H, W, 3) clamped
         """
         if name not in self.aovs:
@@ -125,6 +126,8 @@ class Image:
             view = 0.5 * value + 0.5
             hit = np.any(value != 0, axis=2) if hit is None else hit
         elif value.ndim == 2:
+            if name == "samples":  # camera rays per pixel: the background took rays too
+                hit = None
             finite = np.isfinite(value)
             peak = np.abs(value[finite]).max() if finite.any() else 0.0
             view = np.where(finite, value / peak if peak > 0 else value, 0.0)

@@ -31,6 +31,7 @@ from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
 from ..kernels.surface import shading_side
 from ..kernels.views import geometry_of, lighting_of
+from ..errors import LumosError
 from .common import Film, allocate_aovs, check_memory, set_threads
 
 FLAT, GOURAUD, PHONG = 0, 1, 2
@@ -225,6 +226,9 @@ class Rasterizer:
 def render_raster(compiled, camera, settings, progress=None) -> Film:
     """Scan-line render `compiled` (a `CompiledScene` compiled for method raster) with `settings`."""
     width, height = settings.width, settings.height
+    if settings.antialias == "adaptive":
+        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; raster takes none or "
+                         "supersample (spp passes)")
     check_memory(width, height, bytes_per_pixel=96)
     threads = set_threads(settings.threads)
     mesh = compiled.raster
@@ -263,7 +267,7 @@ def render_raster(compiled, camera, settings, progress=None) -> Film:
     want_aovs = bool(settings.aov)
     depth, normal, albedo, object_id = allocate_aovs(height, width) if want_aovs else allocate_aovs(1, 1)
     rays_per_row = np.zeros(height, np.int64)
-    offsets = sample_offsets(settings.spp, settings.seed)
+    offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
     for s, (jx, jy) in enumerate(offsets):
         zbuf, ids, gbuf = raster.draw(jx, jy)
         _shade(sa, ids, gbuf, mesh.prim_info, mesh.prim_normal, prim_colour, cam_vecs, ortho, np.int64(shading),
@@ -271,6 +275,7 @@ def render_raster(compiled, camera, settings, progress=None) -> Film:
                depth, normal, albedo, object_id, rays_per_row)
         if progress is not None:
             progress((s + 1) / len(offsets))
-    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id}
+    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
+                "samples": np.full((height, width), len(offsets), np.int32)}
     aovs = {name: all_aovs[name] for name in settings.aov}
     return Film(radiance, aovs, rays + int(rays_per_row.sum()), threads)

@@ -21,6 +21,7 @@ from ..kernels.traverse import closest_hit
 from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
+from ..errors import LumosError
 from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
 
 
@@ -92,17 +93,22 @@ def render_raycast(compiled, camera, settings, progress=None) -> Film:
     `progress(fraction)` is called after each band of rows. Returns a `Film`.
     """
     width, height = settings.width, settings.height
+    if settings.antialias == "adaptive":
+        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; raycast takes none or "
+                         "supersample (spp jittered samples)")
     check_memory(width, height)
     threads = set_threads(settings.threads)
+    spp = 1 if settings.antialias == "none" else settings.spp
     cam_vecs, cam_params = camera_arrays(camera)
     radiance = np.zeros((height, width, 3), np.float32)
     depth, normal, albedo, object_id = allocate_aovs(height, width)
     rays_per_row = np.zeros(height, np.int64)
     for y0, y1 in row_bands(height):
-        _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, y0, y1, settings.spp, settings.seed,
+        _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, y0, y1, spp, settings.seed,
                       radiance, depth, normal, albedo, object_id, rays_per_row)
         if progress is not None:
             progress(y1 / height)
-    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id}
+    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
+                "samples": np.full((height, width), spp, np.int32)}
     aovs = {name: all_aovs[name] for name in settings.aov}
-    return Film(radiance, aovs, int(rays_per_row.sum()), threads)
+    return Film(radiance, aovs, int(rays_per_row.sum()), threads, primary_rays=width * height * spp)
