@@ -74,7 +74,12 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
         scene = load_scene(scene)
     t_load = time.perf_counter()
     cfg = resolve_settings(scene, settings)
-    compiled = compile_scene(scene, cfg)
+    try:
+        compiled = compile_scene(scene, cfg)
+    except LumosError as exc:  # the compile step knows the key path, not the file: name it
+        if scene.source is not None and not str(exc).startswith(str(scene.source)):
+            raise LumosError(f"{scene.source}: {exc}") from None
+        raise
     t_build = time.perf_counter()
     with make_progress(progress) as report:
         film = _entry_point(cfg.method)(compiled, scene.camera, cfg, progress=report)
