@@ -11,10 +11,13 @@ Methods are found by name in `METHODS` (one module each under `lumos.methods`).
 from __future__ import annotations
 
 import time
-from typing import Any, Callable, Optional
+from typing import TYPE_CHECKING, Any, Callable
 
 from .errors import LumosError
 from .scene.model import RenderSettings, Scene
+
+if TYPE_CHECKING:
+    from .image import Image
 
 #: name -> "module:function" of each method's single public entry point (imported on first use).
 METHODS: dict[str, str] = {

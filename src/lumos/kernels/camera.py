@@ -9,8 +9,6 @@ With one sample per pixel the pixel centre is used (jx = jy = 0.5); otherwise `s
 Random dimensions 0–1 place the sample in the pixel, 2–3 on the lens.
 """
 
-import math
-
 from .jit import njit
 from .layout import CAM_APERTURE, CAM_FOCUS, CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
 from .rng import rand01

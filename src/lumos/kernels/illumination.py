@@ -179,7 +179,8 @@ def illuminate_coeffs(lit, geo, p, n, V, ka, kd, ks, shininess, seed, pixel, sam
         for s in range(n_samples):
             u1, u2 = 0.5, 0.5
             if lit.light_kind[j] > LIGHT_DIRECTIONAL:
-                u1, u2 = stratified_2d(s, n_samples, rand01(seed, pixel, sample, dim), rand01(seed, pixel, sample, dim + 1))
+                u1, u2 = stratified_2d(s, n_samples, rand01(seed, pixel, sample, dim),
+                                       rand01(seed, pixel, sample, dim + 1))
                 dim += 2
             L, dist, w = sample_light(lit, j, p, u1, u2)
             if w == 0.0 or dot(n, L) <= 0.0:
@@ -278,7 +279,8 @@ def illuminate_whitted(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, se
         for s in range(n_samples):
             u1, u2 = 0.5, 0.5
             if lit.light_kind[j] > LIGHT_DIRECTIONAL:
-                u1, u2 = stratified_2d(s, n_samples, rand01(seed, pixel, sample, dim), rand01(seed, pixel, sample, dim + 1))
+                u1, u2 = stratified_2d(s, n_samples, rand01(seed, pixel, sample, dim),
+                                       rand01(seed, pixel, sample, dim + 1))
                 dim += 2
             L, dist, w = sample_light(lit, j, p, u1, u2)
             if w == 0.0 or dot(n, L) <= 0.0:
