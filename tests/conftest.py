@@ -55,9 +55,11 @@ def geometry(arrays):
 def call_illuminate(arrays, p, n, V, mat_id, seed, pixel, sample, shadows, stack):
     """`illuminate(...)` on the lighting and traversal views of `arrays`."""
     from lumos.kernels.illumination import illuminate
-    from lumos.kernels.views import lighting_of
+    from lumos.kernels.views import lighting_of, surfaces_of
 
-    return illuminate(lighting_of(arrays), geometry(arrays), p, n, V, mat_id, seed, pixel, sample, shadows, stack)
+    stack_t = np.empty(len(stack))
+    return illuminate(lighting_of(arrays), geometry(arrays), surfaces_of(arrays), p, n, n, V, mat_id, seed, pixel,
+                      sample, shadows, stack, stack_t, 0.0)
 
 
 def surfaces(arrays, origins, directions):

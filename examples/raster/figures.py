@@ -90,23 +90,25 @@ def sheet_figure():
     report(save_sheet(sheet, OUT / "sheet.png"), sheet)
 
 
-def t_junctions_figure():
+def mesh_key_figure(scene_file, key, values, figure, columns, width, height):
+    """The scene rendered once per value of a mesh key (set on every mesh object), side by side."""
     panels = []
-    for repair in (False, True):
-        scene = load("t_junctions.yaml")
-        scene.objects[0].repair_t_junctions = repair
-        panels.append((f"repair_t_junctions: {str(repair).lower()}", shot(scene, width=320, height=280)))
-    save(compose(panels, 2), "t_junctions.png")
+    for value in values:
+        scene = load(scene_file)
+        for obj in scene.objects:
+            if obj.type == "mesh":
+                setattr(obj, key, value)
+        label = str(value).lower() if isinstance(value, bool) else value
+        panels.append((f"{key}: {label}", shot(scene, width=width, height=height)))
+    save(compose(panels, columns), figure)
+
+
+def t_junctions_figure():
+    mesh_key_figure("t_junctions.yaml", "repair_t_junctions", (False, True), "t_junctions.png", 2, 320, 280)
 
 
 def subdivision_figure():
-    panels = []
-    for levels in (0, 3):
-        scene = load("subdivision.yaml")
-        for obj in scene.objects:
-            obj.subdivide = levels
-        panels.append((f"subdivide: {levels}", shot(scene, width=480, height=300)))
-    save(compose(panels, 1), "subdivision.png")
+    mesh_key_figure("subdivision.yaml", "subdivide", (0, 3), "subdivision.png", 1, 480, 300)
 
 
 def orientation_figure():
@@ -147,13 +149,7 @@ def perspective_figure():
 
 
 def crease_figure():
-    panels = []
-    for angle in (180, 60):
-        scene = load("crease.yaml")
-        for obj in scene.objects:
-            obj.crease_angle = angle
-        panels.append((f"crease_angle: {angle}", shot(scene, width=480, height=300)))
-    save(compose(panels, 1), "crease.png")
+    mesh_key_figure("crease.yaml", "crease_angle", (180, 60), "crease.png", 1, 480, 300)
 
 
 def main() -> None:

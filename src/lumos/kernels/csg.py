@@ -37,7 +37,15 @@ combined solid and −1.0 where it leaves, b2 = the triangle index (as a float) 
 
 import numpy as np
 
-from .intersect import NO_HIT, _quadratic_roots, intersect_triangle, triangle_setup
+from .intersect import (
+    NO_HIT,
+    _quadratic_roots,
+    axial_quadratic,
+    box_span,
+    intersect_triangle,
+    sphere_roots,
+    triangle_setup,
+)
 from .jit import njit
 from .layout import (
     INFO_COUNT,
@@ -80,8 +88,7 @@ def csg_leaf(part):
 @njit
 def _sphere_span(o, d):
     """(t_in, part_in, t_out, part_out) of the line through the unit sphere; t_in = t_out = 0 if it misses."""
-    t0, t1 = _quadratic_roots(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], o[0] * d[0] + o[1] * d[1] + o[2] * d[2],
-                              o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - 1.0)
+    t0, t1 = sphere_roots(o, d)
     if not (t0 < t1):  # no roots (nan) or a tangent
         return 0.0, 0, 0.0, 0
     return t0, 0, t1, 0
@@ -89,25 +96,8 @@ def _sphere_span(o, d):
 
 @njit
 def _box_span(o, d):
-    """The slab test over the whole line through [0, 1]^3; parts as in `intersect._box`."""
-    t_in, t_out = -_FAR, _FAR
-    p_in, p_out = 0, 0
-    for a in range(3):
-        if d[a] == 0.0:
-            if o[a] < 0.0 or o[a] > 1.0:
-                return 0.0, 0, 0.0, 0
-            continue
-        inv = 1.0 / d[a]
-        ta = (0.0 - o[a]) * inv
-        tb = (1.0 - o[a]) * inv
-        pa, pb = 2 * a, 2 * a + 1
-        if ta > tb:
-            ta, tb = tb, ta
-            pa, pb = pb, pa
-        if ta > t_in:
-            t_in, p_in = ta, pa
-        if tb < t_out:
-            t_out, p_out = tb, pb
+    """The slab test over the whole line through [0, 1]^3 (`intersect.box_span`); all 0 if it misses."""
+    t_in, p_in, t_out, p_out = box_span(o, d)
     if not (t_in < t_out) or t_in == -_FAR or t_out == _FAR:
         return 0.0, 0, 0.0, 0
     return t_in, p_in, t_out, p_out
@@ -118,15 +108,7 @@ def _axial_span(o, d, cone):
     """The whole line through a capped canonical cylinder or cone: the span inside the side surface (an
     infinite cylinder, or the lower nappe of the double cone, both convex) clipped by the slab 0 <= z <= 1.
     Parts: 0 side, 1 cap z = 0, 2 cap z = 1."""
-    if cone:
-        k = 1.0 - o[2]
-        a = d[0] * d[0] + d[1] * d[1] - d[2] * d[2]
-        half_b = o[0] * d[0] + o[1] * d[1] + k * d[2]
-        c = o[0] * o[0] + o[1] * o[1] - k * k
-    else:
-        a = d[0] * d[0] + d[1] * d[1]
-        half_b = o[0] * d[0] + o[1] * d[1]
-        c = o[0] * o[0] + o[1] * o[1] - 1.0
+    a, half_b, c = axial_quadratic(o, d, cone)
     # inside the side surface: q(t) = a·t² + 2·half_b·t + c <= 0
     lo, hi = -_FAR, _FAR
     if a == 0.0:

@@ -8,8 +8,8 @@ N·L <= 0. An area light of radiance Le is sampled at `samples` stratified point
 light of intensity Le·cosθ_y·A / (π·r²·N), so that its diffuse part is Kd·E/π with E the irradiance the light
 delivers (DESIGN.md §3). A sphere light is sampled uniformly in the cone it subtends (intensity Le·Ω/(π·N)).
 
-With `shadows` set, each light sample is tested with a shadow ray (any hit before the light); raycast passes
-False.
+With `shadows` set, each light sample is tested with a shadow ray: opaque objects block it, transparent ones
+let their kt through (`shadow_transmittance`); raycast passes False.
 """
 
 import math
@@ -52,7 +52,7 @@ from .layout import (
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d
 from .surface import offset_origin, surface_at
-from .traverse import any_hit, closest_hit, occluder
+from .traverse import closest_hit, occluder
 from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
 
 _INV_PI = 1.0 / math.pi
@@ -147,24 +147,28 @@ def phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w):
 
 
 @njit
-def illuminate(lit, geo, p, n, V, mat_id, seed, pixel, sample, shadows, stack, time=0.0):
-    """The classic model at point p with unit shading normal n (facing the viewer) and unit V towards the eye.
-
-    `lit` is a `layout.Lighting`; `geo` a `layout.Geometry`, for shadow rays. Returns ((r, g, b), shadow rays
-    traced). Random numbers for area-light samples come from
-    (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on nothing else.
-    """
+def illuminate(lit, geo, surf, p, n, n_geo, V, mat_id, seed, pixel, sample, shadows, stack, stack_t, time):
+    """The classic model at point p with unit shading normal n and geometric normal n_geo (both facing the
+    viewer) and unit V towards the eye, with the coefficients of material `mat_id` (see `illuminate_coeffs`)."""
     mat = lit.materials[mat_id]
     ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
     kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
     ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
-    return illuminate_coeffs(lit, geo, p, n, V, ka, kd, ks, mat[MAT_SHININESS], seed, pixel, sample, shadows, stack,
-                             time)
+    return illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, mat[MAT_SHININESS], seed, pixel, sample,
+                             shadows, stack, stack_t, time)
 
 
 @njit
-def illuminate_coeffs(lit, geo, p, n, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack, time):
-    """`illuminate` with the coefficients given as (r, g, b) tuples (a textured surface's, which vary)."""
+def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack,
+                      stack_t, time):
+    """The classic model with the coefficients given as (r, g, b) tuples (a textured surface's vary per point).
+
+    `lit`, `geo` and `surf` are the `layout.Lighting`, `Geometry` and `Surfaces` views; n is the shading normal
+    and n_geo the geometric one, both on the viewer's side. With `shadows`, each light sample is tested by a
+    shadow ray that transparent objects attenuate (`shadow_transmittance`); raycast passes False. Returns
+    ((r, g, b), shadow rays traced). Random numbers for area-light samples come from
+    (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on nothing else.
+    """
     amb = lit.ambient
     r = ka[0] * amb[0]
     g = ka[1] * amb[1]
@@ -185,15 +189,18 @@ def illuminate_coeffs(lit, geo, p, n, V, ka, kd, ks, shininess, seed, pixel, sam
             L, dist, w = sample_light(lit, j, p, u1, u2)
             if w == 0.0 or dot(n, L) <= 0.0:
                 continue
+            tr, tg, tb = 1.0, 1.0, 1.0
             if shadows:
-                rays += 1
-                origin = madd(p, n, config.RAY_EPSILON * max(1.0, abs(p[0]), abs(p[1]), abs(p[2])))
-                if any_hit(geo, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack, time):
+                origin = offset_origin(p, n_geo, L, config.RAY_EPSILON)
+                (tr, tg, tb), extra = shadow_transmittance(geo, surf, lit, origin, L,
+                                                           dist * (1.0 - config.RAY_EPSILON), stack, stack_t, time)
+                rays += extra
+                if tr == 0.0 and tg == 0.0 and tb == 0.0:
                     continue
             cr, cg, cb = phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w * inv_n)
-            r += cr
-            g += cg
-            b += cb
+            r += cr * tr
+            g += cg * tg
+            b += cb * tb
     return (r, g, b), rays
 
 
@@ -257,42 +264,3 @@ def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
         if t_max <= 0.0:
             break
     return (tr, tg, tb), rays
-
-
-@njit
-def illuminate_whitted(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, stack, stack_t,
-                       time):
-    """The classic model at p with explicit coefficients (textures) and shadow rays that pass through
-    transparent objects, attenuated by their kt (`shadow_transmittance`). `n` is the shading normal, `n_geo`
-    the geometric normal, both on the viewer's side. Returns ((r, g, b), rays traced)."""
-    amb = lit.ambient
-    r = ka[0] * amb[0]
-    g = ka[1] * amb[1]
-    b = ka[2] * amb[2]
-    rays = 0
-    dim = DIM_LIGHTS
-    for j in range(lit.light_kind.shape[0]):
-        Id = row3(lit.light_vecs[j], LV_DIFFUSE)
-        Is = row3(lit.light_vecs[j], LV_SPECULAR)
-        n_samples = lit.light_samples[j]
-        inv_n = 1.0 / n_samples
-        for s in range(n_samples):
-            u1, u2 = 0.5, 0.5
-            if lit.light_kind[j] > LIGHT_DIRECTIONAL:
-                u1, u2 = stratified_2d(s, n_samples, rand01(seed, pixel, sample, dim),
-                                       rand01(seed, pixel, sample, dim + 1))
-                dim += 2
-            L, dist, w = sample_light(lit, j, p, u1, u2)
-            if w == 0.0 or dot(n, L) <= 0.0:
-                continue
-            origin = offset_origin(p, n_geo, L, config.RAY_EPSILON)
-            (tr, tg, tb), extra = shadow_transmittance(geo, surf, lit, origin, L, dist * (1.0 - config.RAY_EPSILON),
-                                                       stack, stack_t, time)
-            rays += extra
-            if tr == 0.0 and tg == 0.0 and tb == 0.0:
-                continue
-            cr, cg, cb = phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w * inv_n)
-            r += cr * tr
-            g += cg * tg
-            b += cb * tb
-    return (r, g, b), rays

@@ -160,9 +160,15 @@ def _quadratic_roots(a, half_b, c):
 
 
 @njit
+def sphere_roots(o, d):
+    """Both roots along the whole line through the unit sphere, smaller first; (nan, nan) if it misses."""
+    return _quadratic_roots(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], o[0] * d[0] + o[1] * d[1] + o[2] * d[2],
+                            o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - 1.0)
+
+
+@njit
 def _sphere(o, d, t_min, t_max):
-    t0, t1 = _quadratic_roots(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], o[0] * d[0] + o[1] * d[1] + o[2] * d[2],
-                              o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - 1.0)
+    t0, t1 = sphere_roots(o, d)
     if t_min < t0 < t_max:
         return t0, 0
     if t_min < t1 < t_max:
@@ -171,8 +177,9 @@ def _sphere(o, d, t_min, t_max):
 
 
 @njit
-def _box(o, d, t_min, t_max):
-    """The cube [0,1]^3; part = 2·axis + (1 if the max face). Rays from inside hit the far face."""
+def box_span(o, d):
+    """The slab test over the whole line through the cube [0,1]^3: (t_near, near_part, t_far, far_part), part =
+    2·axis + (1 if the max face); t_near > t_far when the line misses (±1e300 on an axis it runs along)."""
     t_near = -1e300
     t_far = 1e300
     near_part = 0
@@ -180,7 +187,7 @@ def _box(o, d, t_min, t_max):
     for a in range(3):
         if d[a] == 0.0:
             if o[a] < 0.0 or o[a] > 1.0:
-                return NO_HIT, 0
+                return 1.0, 0, -1.0, 0
             continue
         inv = 1.0 / d[a]
         ta = (0.0 - o[a]) * inv
@@ -193,6 +200,13 @@ def _box(o, d, t_min, t_max):
             t_near, near_part = ta, pa
         if tb < t_far:
             t_far, far_part = tb, pb
+    return t_near, near_part, t_far, far_part
+
+
+@njit
+def _box(o, d, t_min, t_max):
+    """The cube [0,1]^3; part = 2·axis + (1 if the max face). Rays from inside hit the far face."""
+    t_near, near_part, t_far, far_part = box_span(o, d)
     if t_near > t_far:
         return NO_HIT, 0
     if t_min < t_near < t_max:
@@ -216,8 +230,9 @@ def _cap(o, d, z, t_min, t_max):
 
 
 @njit
-def _axial(o, d, t_min, t_max, cone, capped):
-    """Cylinder (cone=False) or cone of the canonical kind; part 0 = side, 1 = cap z=0, 2 = cap z=1."""
+def axial_quadratic(o, d, cone):
+    """(a, half_b, c) of the side surface along the line o + t·d: a·t² + 2·half_b·t + c = 0 on the infinite
+    cylinder x² + y² = 1, or on the double cone x² + y² = (1 − z)²; negative inside."""
     if cone:
         k = 1.0 - o[2]
         a = d[0] * d[0] + d[1] * d[1] - d[2] * d[2]
@@ -227,6 +242,13 @@ def _axial(o, d, t_min, t_max, cone, capped):
         a = d[0] * d[0] + d[1] * d[1]
         half_b = o[0] * d[0] + o[1] * d[1]
         c = o[0] * o[0] + o[1] * o[1] - 1.0
+    return a, half_b, c
+
+
+@njit
+def _axial(o, d, t_min, t_max, cone, capped):
+    """Cylinder (cone=False) or cone of the canonical kind; part 0 = side, 1 = cap z=0, 2 = cap z=1."""
+    a, half_b, c = axial_quadratic(o, d, cone)
     best = t_max
     part = -1
     t0, t1 = _quadratic_roots(a, half_b, c)

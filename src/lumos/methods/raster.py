@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import config
+from ..errors import LumosError
 from ..compile.camera import camera_arrays
 from ..kernels import raster as R
 from ..kernels.illumination import illuminate
@@ -30,8 +31,7 @@ from ..kernels.layout import LIGHT_SPHERE, MAT_EMISSION, MAT_KD
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
 from ..kernels.surface import shading_side
-from ..kernels.views import geometry_of, lighting_of
-from ..errors import LumosError
+from ..kernels.views import geometry_of, lighting_of, surfaces_of
 from .common import Film, allocate_aovs, check_memory, set_threads
 
 FLAT, GOURAUD, PHONG = 0, 1, 2
@@ -72,8 +72,9 @@ def _light_points(sa, points, normals, materials_of, cam_vecs, ortho, seed, shad
     viewer sees is known per pixel, from the polygon's face normal."""
     n_points = points.shape[0]
     for c in prange((n_points + _CHUNK - 1) // _CHUNK):
-        geo, lit = geometry_of(sa), lighting_of(sa)
+        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
         stack = np.empty(config.BVH_STACK, np.int64)
+        stack_t = np.empty(config.BVH_STACK)
         count = 0
         for i in range(c * _CHUNK, min(n_points, (c + 1) * _CHUNK)):
             p = (points[i, 0], points[i, 1], points[i, 2])
@@ -81,14 +82,16 @@ def _light_points(sa, points, normals, materials_of, cam_vecs, ortho, seed, shad
             n = (normals[i, 0], normals[i, 1], normals[i, 2])
             if out.shape[1] == 3:
                 n = _facing(n, V)
-            (r, g, b), extra = illuminate(lit, geo, p, n, V, materials_of[i], seed, i, 0, shadows, stack)
+            (r, g, b), extra = illuminate(lit, geo, surf, p, n, n, V, materials_of[i], seed, i, 0, shadows, stack,
+                                          stack_t, 0.0)
             out[i, 0] = r
             out[i, 1] = g
             out[i, 2] = b
             count += extra
             if out.shape[1] == 6:
-                (r, g, b), extra = illuminate(lit, geo, p, (-n[0], -n[1], -n[2]), V, materials_of[i], seed, i, 1,
-                                              shadows, stack)
+                back = (-n[0], -n[1], -n[2])
+                (r, g, b), extra = illuminate(lit, geo, surf, p, back, back, V, materials_of[i], seed, i, 1, shadows,
+                                              stack, stack_t, 0.0)
                 out[i, 3] = r
                 out[i, 4] = g
                 out[i, 5] = b
@@ -103,8 +106,9 @@ def _shade(sa, ids, gbuf, prim_info, prim_normal, prim_colour, cam_vecs, ortho, 
     `aovs` set (the first pass, when any is asked for) it also fills the AOV buffers."""
     height, width = ids.shape
     for y in prange(height):
-        geo, lit = geometry_of(sa), lighting_of(sa)
+        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
         stack = np.empty(config.BVH_STACK, np.int64)
+        stack_t = np.empty(config.BVH_STACK)
         rays = 0
         for x in range(width):
             prim = ids[y, x]
@@ -138,8 +142,8 @@ def _shade(sa, ids, gbuf, prim_info, prim_normal, prim_colour, cam_vecs, ortho, 
                     g = np.float64(gbuf[y, x, c + 1])
                     b = np.float64(gbuf[y, x, c + 2])
                 else:
-                    (r, g, b), extra = illuminate(lit, geo, p, n_sh, V, mat_id, seed, y * width + x, sample,
-                                                  shadows, stack)
+                    (r, g, b), extra = illuminate(lit, geo, surf, p, n_sh, _facing(fn, V), V, mat_id, seed,
+                                                  y * width + x, sample, shadows, stack, stack_t, 0.0)
                     rays += extra
             # emitted light: one-sided for rect and disk area lights (their winding faces the lit side)
             if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] >= 0.0:

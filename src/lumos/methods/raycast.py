@@ -26,7 +26,7 @@ from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
 
 
 @njit
-def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stack):
+def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stack, stack_t):
     """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays)."""
     t, ref, b1, b2, part = hit
     p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
@@ -42,8 +42,9 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
         emit = 0.0
     # the shading normal on the viewer's side of the surface (DESIGN.md §3: two-sided surfaces)
     n_sh = shading_side(n_sh, n_geo, V)
-    (r, g, b), rays = illuminate_coeffs(lit, geo, p, n_sh, V, ka, kd, ks, mat[MAT_SHININESS], seed, pixel, sample,
-                                        shadows, stack, 0.0)
+    n_g = n_geo if dot(n_geo, V) >= 0.0 else mul(n_geo, -1.0)
+    (r, g, b), rays = illuminate_coeffs(lit, geo, surf, p, n_sh, n_g, V, ka, kd, ks, mat[MAT_SHININESS], seed, pixel,
+                                        sample, shadows, stack, stack_t, 0.0)
     rgb = (r + emit * mat[MAT_EMISSION], g + emit * mat[MAT_EMISSION + 1], b + emit * mat[MAT_EMISSION + 2])
     return rgb, n_sh, kd, object_id, rays
 
@@ -70,7 +71,8 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                     g += sa.background[1]
                     b += sa.background[2]
                     continue
-                rgb, n_sh, kd, obj, extra = shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, s, False, stack)
+                rgb, n_sh, kd, obj, extra = shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, s, False, stack,
+                                                      stack_t)
                 rays += extra
                 r += rgb[0]
                 g += rgb[1]

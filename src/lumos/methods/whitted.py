@@ -30,7 +30,7 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray, camera_ray_at
-from ..kernels.illumination import illuminate_whitted, is_solid
+from ..kernels.illumination import illuminate_coeffs, is_solid
 from ..kernels.jit import njit, njit_parallel, prange
 from ..kernels.layout import (
     LIGHT_SPHERE,
@@ -146,8 +146,8 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
         if depth == 0:
             aov_t, aov_n, aov_kd, aov_obj = t, n_s, kd, obj
-        (lr, lg, lb), extra = illuminate_whitted(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, mat[MAT_SHININESS],
-                                                 seed, pixel, sample, stack, stack_t, time)
+        (lr, lg, lb), extra = illuminate_coeffs(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, mat[MAT_SHININESS],
+                                                seed, pixel, sample, True, stack, stack_t, time)
         rays += extra
         r += w0 * lr
         g += w1 * lg

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any, Literal, Optional, Union
+from typing import Annotated, Any, ClassVar, Literal, Optional, Union
 
 import numpy as np
 from pydantic import Discriminator, Field, PrivateAttr, Tag, field_validator, model_validator
@@ -141,63 +141,63 @@ class Material(StrictModel):
 TEXTURE_TARGETS = ("ka", "kd", "ks", "kr")
 
 
-class Texture(StrictModel):
+class _UVMap(StrictModel):
+    """What textures and bump maps share: an image `file` or a procedural pattern, repeated `scale` times across
+    the uv square, wrapped or clamped outside it."""
+
+    type: str
+    file: Optional[str] = None
+    #: repeats across the uv square: (u, v) multipliers (a scalar means both)
+    scale: Union[tuple[Positive, Positive], Positive] = 1.0
+    wrap: Literal["repeat", "clamp"] = "repeat"
+    _path: Optional[Path] = PrivateAttr(default=None)
+    _noun: ClassVar[str] = "map"  # for error messages
+
+    @field_validator("scale", mode="before")
+    @classmethod
+    def _scale_tuple(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @model_validator(mode="after")
+    def _check_file(self):
+        if (self.type == "image") != (self.file is not None):
+            raise ValueError(f"an image {self._noun} needs file (and only an image {self._noun} takes one)")
+        return self
+
+    @property
+    def uv_scale(self) -> tuple[float, float]:
+        return self.scale if isinstance(self.scale, tuple) else (self.scale, self.scale)
+
+
+class Texture(_UVMap):
     """A colour that varies over a surface, looked up at the hit's (u, v), replacing the coefficients named in
     `apply_to`. `image`: a PNG/JPEG file (relative to the scene file), bilinearly filtered; `checker`,
     `stripes` (along u) and `noise` (gradient noise, blending `colors`) are procedural."""
 
     type: Literal["image", "checker", "stripes", "noise"]
-    file: Optional[str] = None
     colors: tuple[Color, Color] = ((0.9, 0.9, 0.9), (0.1, 0.1, 0.1))
-    #: repeats across the uv square: (u, v) multipliers (a scalar means both)
-    scale: Union[tuple[Positive, Positive], Positive] = 1.0
-    wrap: Literal["repeat", "clamp"] = "repeat"
     apply_to: list[Literal["ka", "kd", "ks", "kr"]] = Field(default_factory=lambda: ["ka", "kd"])
-    _path: Optional[Path] = PrivateAttr(default=None)
+    _noun: ClassVar[str] = "texture"
 
-    @field_validator("scale", "colors", mode="before")
+    @field_validator("colors", mode="before")
     @classmethod
-    def _tuples(cls, v):
+    def _colors_tuple(cls, v):
         return tuple(v) if isinstance(v, list) else v
 
     @model_validator(mode="after")
     def _check(self):
-        if (self.type == "image") != (self.file is not None):
-            raise ValueError("an image texture needs file (and only an image texture takes one)")
         if not self.apply_to:
             raise ValueError("apply_to must name at least one of ka, kd, ks, kr")
         return self
 
-    @property
-    def uv_scale(self) -> tuple[float, float]:
-        return self.scale if isinstance(self.scale, tuple) else (self.scale, self.scale)
 
-
-class Bump(StrictModel):
+class Bump(_UVMap):
     """Bump mapping: the shading normal tilted by the gradient of a height field over (u, v): an image's
     luminance or gradient noise, times `strength`."""
 
     type: Literal["image", "noise"]
-    file: Optional[str] = None
-    scale: Union[tuple[Positive, Positive], Positive] = 1.0
     strength: Finite = 1.0
-    wrap: Literal["repeat", "clamp"] = "repeat"
-    _path: Optional[Path] = PrivateAttr(default=None)
-
-    @field_validator("scale", mode="before")
-    @classmethod
-    def _tuples(cls, v):
-        return tuple(v) if isinstance(v, list) else v
-
-    @model_validator(mode="after")
-    def _check(self):
-        if (self.type == "image") != (self.file is not None):
-            raise ValueError("an image bump map needs file (and only an image bump map takes one)")
-        return self
-
-    @property
-    def uv_scale(self) -> tuple[float, float]:
-        return self.scale if isinstance(self.scale, tuple) else (self.scale, self.scale)
+    _noun: ClassVar[str] = "bump map"
 
 
 Material.model_rebuild()
