@@ -12,7 +12,7 @@ Parallelism: the top of the tree is built first (large nodes bin in parallel chu
 
 import numpy as np
 
-from .jit import njit, njit_parallel, prange
+from .jit import njit_alloc, njit_parallel, prange
 
 #: Trees deeper than this make leaves (the traversal stack is 64 entries; one push per level at most).
 MAX_DEPTH = 60
@@ -24,7 +24,7 @@ _CHUNKS = 16
 i64 = np.int64
 
 
-@njit
+@njit_alloc
 def _half_area(b):
     dx = b[3] - b[0]
     dy = b[4] - b[1]
@@ -34,14 +34,14 @@ def _half_area(b):
     return dx * dy + dy * dz + dz * dx
 
 
-@njit
+@njit_alloc
 def _reset(box):
     """Set (..., 6) boxes empty: +inf minimum, -inf maximum."""
     box[..., :3] = np.inf
     box[..., 3:] = -np.inf
 
 
-@njit
+@njit_alloc
 def _grow(dst, src):
     for k in range(3):
         if src[k] < dst[k]:
@@ -50,7 +50,7 @@ def _grow(dst, src):
             dst[3 + k] = src[3 + k]
 
 
-@njit
+@njit_alloc
 def _bin_range(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count):
     """Accumulate primitives order[start:end] into per-axis bins (bin_box (3, B, 6), bin_count (3, B))."""
     n_bins = bin_count.shape[1]
@@ -82,7 +82,7 @@ def _bin_parallel(order, start, end, bounds, cent, cbox, scale, bin_box, bin_cou
                 _grow(bin_box[a, b], boxes[c, a, b])
 
 
-@njit
+@njit_alloc
 def _best_split(bin_box, bin_count, cbox, right_area, acc):
     """Sweep the bins; returns (cost, axis, split bin) minimising A_L·N_L + A_R·N_R (not yet divided by A)."""
     n_bins = bin_count.shape[1]
@@ -113,7 +113,7 @@ def _best_split(bin_box, bin_count, cbox, right_area, acc):
     return best_cost, best_axis, best_split
 
 
-@njit
+@njit_alloc
 def _partition(order, start, end, cent, axis, cbox, scale, split, n_bins, left_cbox, right_cbox):
     """Move primitives whose bin is below `split` to the front; gather both sides' centroid bounds."""
     _reset(left_cbox)
@@ -137,7 +137,7 @@ def _partition(order, start, end, cent, axis, cbox, scale, split, n_bins, left_c
     return i
 
 
-@njit
+@njit_alloc
 def _range_bounds(order, start, end, bounds, cent, box, cbox):
     _reset(box)
     _reset(cbox)
@@ -149,7 +149,7 @@ def _range_bounds(order, start, end, bounds, cent, box, cbox):
             cbox[3 + k] = max(cbox[3 + k], cent[p, k])
 
 
-@njit
+@njit_alloc
 def _store_box(node_box, node, box):
     """Round the float64 box outward to float32 (a relative widening larger than one float32 ulp)."""
     for k in range(3):
@@ -158,7 +158,7 @@ def _store_box(node_box, node, box):
         node_box[node, 3 + k] = hi + (abs(hi) * 4e-7 + 1e-30)
 
 
-@njit
+@njit_alloc
 def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order, bounds, cent, max_leaf, n_bins,
                 cost_traversal, task_size, parallel_min, node_box, node_link, tasks, n_tasks):
     """Build the subtree of node `root` over order[start:end], allocating nodes from `first_free` upward.
@@ -260,7 +260,7 @@ def _build_tasks(tasks, bases, order, bounds, cent, max_leaf, n_bins, cost_trave
                                             node_link, tasks, i64(0))
 
 
-@njit
+@njit_alloc
 def build_bvh(bounds, max_leaf, n_bins, cost_traversal):
     """Build a BVH over primitive boxes `bounds` float64 (n, 6) (min xyz, max xyz); n >= 1.
 

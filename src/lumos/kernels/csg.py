@@ -46,7 +46,7 @@ from .intersect import (
     sphere_roots,
     triangle_setup,
 )
-from .jit import njit
+from .jit import njit, njit_alloc
 from .layout import (
     INFO_COUNT,
     INFO_KIND,
@@ -261,7 +261,7 @@ def _toggle(nodes, state, first_node, first_leaf, n_leaves, root, j):
     return state[n_leaves + root - first_node]
 
 
-@njit
+@njit_alloc
 def intersect_csg(geo, s, o, d, t_min, t_max):
     """Nearest crossing of csg shape s's boundary with t_min < t < t_max: (t, part, b1, b2) as in the module
     doc, or (-1, 0, 0, 0). `o` is the origin already moved back by time·motion (see `traverse._shape_hit`)."""

@@ -41,8 +41,15 @@ def _drop_stale_cache() -> None:
 if os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0"):
     _drop_stale_cache()
 
-#: Device-style helpers: inlined into their callers by LLVM, cached on disk.
-njit = numba.njit(cache=True, nogil=True, error_model="numpy")
+#: Device functions (intersection, traversal, shading: everything on the per-ray path), cached on disk. They are
+#: compiled without Numba's runtime (NRT): they allocate nothing, and their callers own every array they see, so
+#: they need no reference counts. With the runtime, each call that is not inlined increments and decrements the
+#: count of every array in its tuple arguments (30 calls on entry and 30 on exit for `whitted.trace`), which took a
+#: quarter of the ray tracers' time (perf: NRT_incref, NRT_decref) and bounced shared counters between cores.
+njit = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+#: Helpers that allocate arrays (BVH build, raster bins, scratch buffers, csg crossing lists): with the runtime,
+#: said explicitly, since a function called from a device function would otherwise inherit its "no runtime".
+njit_alloc = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=True)
 #: Top-level kernels run with prange over rows or tiles.
-njit_parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+njit_parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy", _nrt=True)
 prange = numba.prange

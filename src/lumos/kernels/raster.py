@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from .jit import njit, njit_parallel, prange
+from .jit import njit, njit_alloc, njit_parallel, prange
 from .layout import CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
 
 #: Rows per band: the unit of parallel work in the raster pass.
@@ -157,7 +157,7 @@ def bin_prims(prim_start, prim_index, clip, screen, near, ortho, cull, width, he
         bin_chunk(c, prim_start, prim_index, clip, screen, near, ortho, cull, width, height, jy, row_lo, row_hi)
 
 
-@njit
+@njit_alloc
 def bin_chunk(c, prim_start, prim_index, clip, screen, near, ortho, cull, width, height, jy, row_lo, row_hi):
     """Rows to scan for the polygons of one chunk (see bin_prims)."""
     n_prims = prim_start.shape[0] - 1
@@ -204,7 +204,7 @@ def bin_chunk(c, prim_start, prim_index, clip, screen, near, ortho, cull, width,
             row_hi[prim] = np.int32(hi)
 
 
-@njit
+@njit_alloc
 def fill_bins(row_lo, row_hi, n_bands):
     """Polygons sorted into bands of BAND rows (a counting sort; original order kept within each band)."""
     counts = np.zeros(n_bands + 1, np.int64)
@@ -234,7 +234,7 @@ def raster_bands(bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, 
                     width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count)
 
 
-@njit
+@njit_alloc
 def raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
                 width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count):
     """Scan-convert every polygon binned to one band of rows, in order (the same result on any thread).

@@ -31,7 +31,7 @@ from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray, camera_ray_at
 from ..kernels.illumination import illuminate_coeffs, is_solid
-from ..kernels.jit import njit, njit_parallel, prange
+from ..kernels.jit import njit, njit_alloc, njit_parallel, prange
 from ..kernels.layout import (
     LIGHT_SPHERE,
     MAT_EMISSION,
@@ -59,7 +59,7 @@ AA_NONE, AA_SUPERSAMPLE, AA_ADAPTIVE = 0, 1, 2
 _ANTIALIAS = {"none": AA_NONE, "supersample": AA_SUPERSAMPLE, "adaptive": AA_ADAPTIVE}
 
 
-@njit
+@njit_alloc
 def _scratch(max_depth):
     """Per-thread work arrays for `trace`: the ray stack (origin, direction, weight; depth, media count;
     media objects and indices of refraction) and the BVH traversal stack."""
