@@ -13,7 +13,7 @@ which gives POV-Ray 3.7 (`povray`; a warning that it cannot open the user config
 The scene is `examples/whitted/classic.yaml` for lumos and `benchmarks/scenes/whitted.pov`, the same scene
 written by hand for POV-Ray (a checkered box, a mirror sphere, a glass sphere with Fresnel reflection, two point
 lights casting shadows, a sky-blue background; the same camera and framing, 4 bounces after the camera ray,
-adaptive anti-aliasing with threshold 0.05 and at most 3 subdivisions). The two are the same kind and amount of
+adaptive anti-aliasing with threshold 0.05 and at most 2 subdivisions). The two are the same kind and amount of
 work, not the same image to the pixel: POV-Ray's finishes are close to lumos's illumination model, not equal.
 
 Both renderers run as whole processes (subprocess), timed with `time.perf_counter` around `subprocess.run`,
@@ -23,7 +23,8 @@ Both renderers run as whole processes (subprocess), timed with `time.perf_counte
     lumos render examples/whitted/classic.yaml -o <out>/lumos.png --width 1024 --height 768 --antialias adaptive
           --threads 2 --method whitted --stats <out>/lumos.json -q
 
-(`+AM2` is POV-Ray's recursive adaptive anti-aliasing, `+R3` its depth, `+WT2` two render threads.) lumos runs
+(`+AM2` is POV-Ray's recursive adaptive anti-aliasing, `+R3` its depth, which counts the pixel itself: at most two
+subdivisions, as lumos's `adaptive_depth: 2`; `+WT2` two render threads.) lumos runs
 once untimed first, from a fresh empty `NUMBA_CACHE_DIR` (or `--numba-cache DIR` as found), to compile its
 kernels; that cold time is reported too, and the timed runs use the filled cache.
 
@@ -53,7 +54,9 @@ from common import machine
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "examples" / "whitted" / "classic.yaml"
 POV_SCENE = ROOT / "benchmarks" / "scenes" / "whitted.pov"
-AA_THRESHOLD, AA_DEPTH = 0.05, 3  # POV-Ray's +A and +R; the lumos scene says the same in its render: block
+# POV-Ray's +A and +R. Its depth counts the pixel itself: +R3 subdivides at most twice, lumos's adaptive_depth 2,
+# which the lumos scene's render: block says (with adaptive_threshold 0.05).
+AA_THRESHOLD, AA_DEPTH = 0.05, 3
 
 # POV-Ray's render statistics (stderr), e.g. "Rays:            1648656   Saved:  102147   Max Level: 5/5"
 POV_FIGURES = {

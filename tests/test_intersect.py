@@ -172,7 +172,12 @@ def test_normals_unit_and_analytic_uvs_in_range(name, rng):
 @pytest.mark.nojit
 def test_sphere_normal_is_radial_and_uv_follows_latitude():
     c, r = np.array([0.3, -0.5, 1.2]), 0.9
-    arrays = compile_dict({"objects": [SPHERE]}).arrays
+    # uv is computed where the material reads it (a texture here); elsewhere it is left at (0, 0)
+    textured = {"materials": {"checks": {"texture": {"type": "checker"}}}, "objects": [dict(SPHERE, material="checks")]}
+    arrays = compile_dict(textured).arrays
+    plain = compile_dict({"objects": [SPHERE]}).arrays
+    (untextured,) = surfaces(plain, [c + [0, 3, 0]], [[0, -1.0, 0]])
+    assert untextured["u"] == 0.0 and untextured["v"] == 0.0
     # straight down onto the north pole, and onto the south pole from below
     (top, bottom) = surfaces(arrays, [c + [0, 3, 0], c - [0, 3, 0]], [[0, -1.0, 0], [0, 1.0, 0]])
     np.testing.assert_allclose(top["n_geo"], [0, 1, 0], atol=1e-12)

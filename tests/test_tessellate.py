@@ -272,7 +272,7 @@ def test_uvs_match_ray_tracer(kind):
                 continue  # a seam duplicate: u = 0 and u = 1 are the same points
             if (kind == SHAPE_SPHERE and abs(abs(p[1]) - 1) < 1e-9) or (kind == SHAPE_CONE and abs(p[2] - 1) < 1e-9):
                 continue  # a pole or apex duplicate, at its segment's middle u
-        n_kernel, u, v = _canonical_normal_uv(kind, part, tuple(float(c) for c in p))
+        n_kernel, u, v = _canonical_normal_uv(kind, part, tuple(float(c) for c in p), True)
         assert (u, v) == pytest.approx(tuple(uv), abs=1e-9)
         n_kernel = np.asarray(n_kernel) / np.linalg.norm(n_kernel)
         np.testing.assert_allclose(n, n_kernel, atol=1e-9)

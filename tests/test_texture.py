@@ -441,7 +441,9 @@ SHAPES = [
 
 
 def shape_hits(obj, rng, n=150):
-    compiled = compile_dict({"objects": [dict(obj, transform=TRANSFORM)]})
+    # a textured material, so that surface_at computes uv (it skips it for materials that read none)
+    compiled = compile_dict({"materials": {"checks": {"texture": {"type": "checker"}}},
+                             "objects": [dict(obj, transform=TRANSFORM, material="checks")]})
     dirs = rng.normal(size=(n, 3))
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     target = np.asarray(TRANSFORM["translate"]) + rng.normal(scale=0.2, size=(n, 3))
@@ -528,7 +530,8 @@ def test_triangle_tangents_match_finite_differences(rng, with_uvs):
 
 def test_degenerate_tangents_fall_back_to_an_orthonormal_frame():
     """At a sphere's pole ∂p/∂u vanishes: the tangents become an orthonormal pair around n with t × b = n."""
-    arrays = compile_dict({"objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 2.0}]}).arrays
+    arrays = compile_dict({"materials": {"checks": {"texture": {"type": "checker"}}},
+                           "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 2.0, "material": "checks"}]}).arrays
     hit = surfaces(arrays, [[0.0, 5.0, 0.0]], [[0.0, -1.0, 0.0]])[0]
     assert hit["v"] == pytest.approx(1.0)
     t, b = tangents(arrays, hit)

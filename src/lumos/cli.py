@@ -38,6 +38,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except SystemExit as exc:  # --help, --version, usage errors (argparse prints them)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     try:
+        if args.command in ("render", "sheet"):
+            _skip_numba_blas_probe()
         return args.run(args, started) or 0
     except LumosError as exc:
         print(f"lumos: error: {_one_line(str(exc))}", file=sys.stderr)
@@ -51,6 +53,27 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"lumos: internal error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
         print("lumos: this is a bug in lumos; rerun with LUMOS_DEBUG=1 to see the traceback", file=sys.stderr)
         return 1
+
+
+def _skip_numba_blas_probe() -> None:
+    """Numba probes for BLAS by importing SciPy's linear algebra the first time it loads its array functions:
+    0.14 s of a small render's 0.9 s, and SciPy's OpenBLAS starts threads that compete with the render's on a
+    small machine. No lumos kernel uses BLAS (no np.dot or @ in Numba code), so this process, which is ours,
+    lets the probe fail once; Numba then only uses its own loop for np.correlate. Library users are untouched."""
+    if "numba.np.arraymath" in sys.modules:
+        return
+    import numba.np.linalg as numba_linalg
+
+    probe = numba_linalg.ensure_blas
+
+    def no_blas():
+        raise ImportError("the lumos command runs without Numba's BLAS")
+
+    numba_linalg.ensure_blas = no_blas
+    try:
+        import numba.np.arraymath  # noqa: F401  (runs the probe)
+    finally:
+        numba_linalg.ensure_blas = probe  # np.dot in later Numba code still finds SciPy
 
 
 def build_parser() -> argparse.ArgumentParser:

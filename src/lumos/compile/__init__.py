@@ -270,6 +270,11 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
     prim_ref[~is_tri] = ~shape_ids.astype(np.int32)
 
     tex_info, tex_pixels = build_textures(materials)  # also fills the rows' MAT_TEXTURE / MAT_BUMP
+    material_rows = materials.array()
+    if n_shape:
+        shape_mats = material_rows[shape_info[:, L.INFO_MATERIAL]]
+        reads_uv = (shape_mats[:, L.MAT_TEXTURE] >= 0) | (shape_mats[:, L.MAT_BUMP] >= 0)
+        shape_info[reads_uv, L.INFO_FLAGS] |= L.FLAG_READS_UV
     arrays = L.SceneArrays(
         tri_verts=np.ascontiguousarray(np.concatenate([tri_verts[tri_order], solid_tris[0]])),
         tri_normals=np.ascontiguousarray(np.concatenate([tri_normals[tri_order], solid_tris[1]])),
@@ -281,7 +286,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         node_box=node_box,
         node_link=node_link,
         unbounded=unbounded,
-        materials=materials.array(),
+        materials=material_rows,
         light_kind=light_kind,
         light_samples=light_samples,
         light_vecs=light_vecs,

@@ -29,6 +29,7 @@ INFO_COUNT = 6  # shapes: number of solids (SHAPE_CSG) or of triangles (SHAPE_ME
 SHAPE_INFO_SIZE = 7
 
 FLAG_CAPPED = 1  # shapes: cylinder/cone caps
+FLAG_READS_UV = 2  # shapes: the material reads (u, v) (a texture or bump map); the others skip computing them
 FLAG_NORMALS = 1  # triangles: per-vertex shading normals present
 FLAG_UVS = 2  # triangles: per-vertex uvs present
 

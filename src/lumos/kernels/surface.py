@@ -13,6 +13,7 @@ from .csg import csg_leaf
 from .jit import njit
 from .layout import (
     FLAG_NORMALS,
+    FLAG_READS_UV,
     FLAG_UVS,
     INFO_FLAGS,
     INFO_KIND,
@@ -34,9 +35,12 @@ _INV_2PI = 0.5 / math.pi
 
 
 @njit
-def _canonical_normal_uv(kind, part, p):
-    """Object-space normal (not unit) and (u, v) on a canonical shape at point p."""
+def _canonical_normal_uv(kind, part, p, want_uv):
+    """Object-space normal (not unit) and (u, v) on a canonical shape at point p; (u, v) = (0, 0) for the sphere
+    and the sides of cylinders and cones unless `want_uv` (their uv costs an atan2, a tenth of a hit's time)."""
     if kind == SHAPE_SPHERE:
+        if not want_uv:
+            return p, 0.0, 0.0
         u = 0.5 + math.atan2(p[0], p[2]) * _INV_2PI
         v = 0.5 + math.asin(min(1.0, max(-1.0, p[1]))) / math.pi
         return p, u, v
@@ -53,7 +57,7 @@ def _canonical_normal_uv(kind, part, p):
             return (0.0, 0.0, -1.0), 0.5 + 0.5 * p[0], 0.5 + 0.5 * p[1]
         if part == 2:
             return (0.0, 0.0, 1.0), 0.5 + 0.5 * p[0], 0.5 + 0.5 * p[1]
-        u = 0.5 + math.atan2(p[1], p[0]) * _INV_2PI
+        u = 0.5 + math.atan2(p[1], p[0]) * _INV_2PI if want_uv else 0.0
         if kind == SHAPE_CYLINDER:
             return (p[0], p[1], 0.0), u, p[2]
         n = (p[0], p[1], 1.0 - p[2])
@@ -70,7 +74,8 @@ def surface_at(surf, o, d, t, ref, b1, b2, part, time):
     """Returns (p, n_geometric, n_shading, u, v, material_id, object_id, light_id) for a hit (`surf` is a
     `layout.Surfaces`).
 
-    Normals are unit length and not yet turned towards the viewer (see `face_forward`).
+    Normals are unit length and not yet turned towards the viewer (see `face_forward`). (u, v) is (0, 0) on the
+    curved shapes whose material reads no uv (`FLAG_READS_UV`).
     """
     p = madd(o, d, t)
     if ref >= 0:
@@ -105,7 +110,7 @@ def surface_at(surf, o, d, t, ref, b1, b2, part, time):
     q = p
     if m[3, 3] != 0.0:  # a moving shape, displaced by time·motion
         q = (p[0] - time * m[3, 0], p[1] - time * m[3, 1], p[2] - time * m[3, 2])
-    n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], part, xform_point(m, q))
+    n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], part, xform_point(m, q), info[INFO_FLAGS] & FLAG_READS_UV)
     n = normalize(xform_normal(m, n_obj))
     return p, n, n, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]
 
@@ -124,7 +129,8 @@ def _csg_surface(surf, p, d, b1, b2, part, time, object_id):
     if info[INFO_KIND] == SHAPE_MESH_SOLID:
         n, u, w = _triangle_at(surf, np.int64(b2), q)
     else:
-        n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], leaf_part, xform_point(m, q))
+        n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], leaf_part, xform_point(m, q),
+                                           info[INFO_FLAGS] & FLAG_READS_UV)
         n = normalize(xform_normal(m, n_obj))
     if (dot(n, d) > 0.0) == (b1 > 0.0):
         n = (-n[0], -n[1], -n[2])
