@@ -186,6 +186,69 @@ def test_shadow_transmittance_through_glass(case):
     np.testing.assert_allclose(img, render_whitted(scene, W, H, max_depth=0), atol=1e-5)
 
 
+def test_one_pass_transmittance_matches_the_ordered_walk(rng):
+    """`traverse.transmittance` multiplies what each primitive lets through, in traversal order, in one pass; the
+    walk (`illumination.walk_transmittance`) goes hit by hit along the ray. On random rays through glass and
+    opaque spheres, boxes, capped cylinders and cones, disks, triangles, a plane and an area light's rect (which
+    lets everything through), one sphere moving, from outside and from inside solids, they agree; an open glass
+    cylinder is left to the walk."""
+    from conftest import compile_dict
+
+    from lumos import config
+    from lumos.kernels.illumination import walk_transmittance
+    from lumos.kernels.traverse import transmittance
+    from lumos.kernels.views import geometry_of, lighting_of, surfaces_of
+
+    glass = [{"kt": [0.9, 0.7, 0.5], "ior": 1.5}, {"kt": 0.6, "ior": 1.3}, {"kt": [0.5, 0.8, 0.9], "ior": 1.0}]
+    opaque = {"kd": 0.5}
+    objects = [{"type": "plane", "point": [0, -3, 0], "normal": [0, 1, 0.2], "material": glass[1]}]
+    for i in range(14):
+        c = rng.uniform(-3, 3, 3)
+        mat = opaque if i % 5 == 4 else glass[i % 3]
+        kind = ["sphere", "box", "cylinder", "cone", "disk", "triangle"][i % 6]
+        if kind == "sphere":
+            obj = {"type": "sphere", "center": c.tolist(), "radius": float(rng.uniform(0.3, 1.0))}
+            if i == 7:
+                obj["motion"] = [0.3, 0.0, -0.2]
+        elif kind == "box":
+            obj = {"type": "box", "min": (c - 0.6).tolist(), "max": (c + rng.uniform(0.2, 0.8, 3)).tolist()}
+        elif kind in ("cylinder", "cone"):
+            obj = {"type": kind, "base": c.tolist(), "top": (c + rng.normal(size=3)).tolist(), "radius": 0.5,
+                   "capped": True}
+        elif kind == "disk":
+            obj = {"type": "disk", "center": c.tolist(), "normal": rng.normal(size=3).tolist(), "radius": 0.8}
+        else:
+            obj = {"type": "triangle", "vertices": (c + rng.uniform(-1, 1, (3, 3))).tolist()}
+        objects.append(dict(obj, material=mat))
+    light = {"type": "area", "shape": "rect", "corner": [-1, 0, -1], "edge_u": [2, 0, 0.3], "edge_v": [0, 1.5, 1]}
+    arrays = compile_dict({"lights": [light], "objects": objects}).arrays
+    geo, surf, lit = geometry_of(arrays), surfaces_of(arrays), lighting_of(arrays)
+    stack, stack_t = np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK)
+    seen = []
+    for _ in range(3000):
+        o = tuple(rng.uniform(-4, 4, 3))
+        d = rng.normal(size=3)
+        d = tuple(d / np.linalg.norm(d))
+        dist, time = float(rng.uniform(0.5, 9.0)), float(rng.uniform(0, 1))
+        fast, settled = transmittance(geo, surf.tri_info, lit.materials, o, d, dist, stack, time)
+        assert settled
+        slow, _ = walk_transmittance(geo, surf, lit, o, d, dist, stack, stack_t, time)
+        np.testing.assert_allclose(fast, slow, rtol=1e-9, atol=1e-12)
+        seen.append(round(max(fast), 6))
+    # blocked, clear, and many products in between (through one glass, two, three...)
+    assert seen.count(0.0) > 20 and seen.count(1.0) > 100 and len(set(seen)) >= 8
+    assert sum(0.0 < x < 1.0 for x in seen) > 300
+    # an open glass cylinder can be crossed twice: only the walk knows
+    arrays = compile_dict({"objects": [{"type": "cylinder", "base": [0, 0, 0], "top": [0, 2, 0], "radius": 1,
+                                        "capped": False, "material": glass[1]}]}).arrays
+    geo, surf, lit = geometry_of(arrays), surfaces_of(arrays), lighting_of(arrays)
+    o, d = (-3.0, 1.0, 0.0), (1.0, 0.0, 0.0)
+    _, settled = transmittance(geo, surf.tri_info, lit.materials, o, d, 6.0, stack, 0.0)
+    assert not settled
+    slow, _ = walk_transmittance(geo, surf, lit, o, d, 6.0, stack, stack_t, 0.0)
+    np.testing.assert_allclose(slow, 0.36, rtol=1e-12)
+
+
 # ------------------------------------------------------------------------------------ the done criterion
 
 DONE_CAMERAS = {

@@ -150,6 +150,17 @@ def _axial_span(o, d, cone):
     return lo, p_lo, hi, p_hi
 
 
+@njit
+def solid_span(kind, o, d):
+    """(t_in, part_in, t_out, part_out) of the whole line o + t·d (object space) through a canonical convex
+    solid: a sphere, a box, or a capped cylinder or cone; t_in = t_out = 0 if it misses."""
+    if kind == SHAPE_SPHERE:
+        return _sphere_span(o, d)
+    if kind == SHAPE_BOX:
+        return _box_span(o, d)
+    return _axial_span(o, d, kind == SHAPE_CONE)
+
+
 # ------------------------------------------------------------------------------------------- the crossings
 
 
@@ -216,14 +227,7 @@ def _gather(geo, first_leaf, n_leaves, o, d, t_after, ts, codes):
                     n, dropped = _insert(ts, codes, n, t, code, dropped)
             continue
         m = geo.shape_xform[s]
-        oo = xform_point(m, o)
-        dd = xform_vector(m, d)
-        if kind == SHAPE_SPHERE:
-            t_in, p_in, t_out, p_out = _sphere_span(oo, dd)
-        elif kind == SHAPE_BOX:
-            t_in, p_in, t_out, p_out = _box_span(oo, dd)
-        else:
-            t_in, p_in, t_out, p_out = _axial_span(oo, dd, kind == SHAPE_CONE)
+        t_in, p_in, t_out, p_out = solid_span(kind, xform_point(m, o), xform_vector(m, d))
         if t_in < t_out:
             if t_in > t_after:
                 n, dropped = _insert(ts, codes, n, t_in, (np.int64(p_in) << (_LEAF_BITS + 1)) | j, dropped)

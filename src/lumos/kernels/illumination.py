@@ -40,8 +40,6 @@ from .layout import (
     FLAG_CAPPED,
     INFO_FLAGS,
     INFO_KIND,
-    INFO_LIGHT,
-    INFO_MATERIAL,
     SHAPE_BOX,
     SHAPE_CONE,
     SHAPE_CSG,
@@ -52,7 +50,7 @@ from .layout import (
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d
 from .surface import offset_origin, surface_at
-from .traverse import closest_hit, occluder
+from .traverse import SHADOW_CUTOFF, closest_hit, transmittance
 from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
 
 _INV_PI = 1.0 / math.pi
@@ -60,8 +58,6 @@ _INV_PI = 1.0 / math.pi
 DIM_LIGHTS = 16
 #: A shadow ray passes through at most this many transparent surfaces before it counts as blocked.
 MAX_SHADOW_CROSSINGS = 32
-#: Transmittance below which a shadow ray stops (the light is as good as blocked).
-SHADOW_CUTOFF = 1e-4
 
 
 @njit
@@ -224,20 +220,25 @@ def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
     """What reaches `origin` from a light at `dist` along L: (rgb factor, rays traced). Opaque objects (kt = 0)
     block; a transparent object multiplies by its kt each time the ray enters it if it is a solid, each time
     the ray crosses it if it is a surface (DESIGN.md §3: once per transparent object passed through)."""
-    # one any-hit traversal settles most shadow rays: nothing in the way, or an opaque occluder
-    blocked, ref = occluder(geo, origin, L, 0.0, dist, stack, time)
-    if not blocked:
-        return (1.0, 1.0, 1.0), 1
-    info = surf.tri_info[ref] if ref >= 0 else surf.shape_info[~ref]
-    if ref >= 0 or info[INFO_KIND] != SHAPE_CSG:  # a csg object's solids have materials of their own
-        mat = lit.materials[info[INFO_MATERIAL]]
-        if info[INFO_LIGHT] < 0 and mat[MAT_KT] <= 0.0 and mat[MAT_KT + 1] <= 0.0 and mat[MAT_KT + 2] <= 0.0:
-            return (0.0, 0.0, 0.0), 1
-    # something transparent is in the way: walk the hits in order
+    # one any-order traversal settles a shadow ray unless a csg object or an open cylinder or cone that lets
+    # light through is on it: nothing in the way, an opaque occluder, or transparent triangles, planes and
+    # convex solids, each counted once
+    rgb, settled = transmittance(geo, surf.tri_info, lit.materials, origin, L, dist, stack, time)
+    if settled:
+        return rgb, 1
+    rgb, rays = walk_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time)
+    return rgb, rays + 1
+
+
+@njit
+def walk_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
+    """`shadow_transmittance` hit by hit, in order along the ray, one closest-hit traversal each: (rgb factor,
+    rays traced). It handles every kind of surface (a csg object may be entered several times) and is the
+    slow twin that `traverse.transmittance` is tested against."""
     tr, tg, tb = 1.0, 1.0, 1.0
     o = origin
     t_max = dist
-    rays = 1
+    rays = 0
     for _ in range(MAX_SHADOW_CROSSINGS):
         rays += 1
         hit = closest_hit(geo, o, L, 0.0, t_max, stack, stack_t, time)

@@ -8,10 +8,28 @@ fills b1 and b2 of the hit record.
 
 import numpy as np
 
-from .csg import intersect_csg
+from .csg import intersect_csg, solid_span
 from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
 from .jit import njit
-from .layout import FLAG_CAPPED, INFO_FLAGS, INFO_KIND, NODE_COUNT, NODE_FIRST, SHAPE_CSG
+from .layout import (
+    FLAG_CAPPED,
+    INFO_FLAGS,
+    INFO_KIND,
+    INFO_LIGHT,
+    INFO_MATERIAL,
+    MAT_KT,
+    NODE_COUNT,
+    NODE_FIRST,
+    SHAPE_BOX,
+    SHAPE_CONE,
+    SHAPE_CSG,
+    SHAPE_CYLINDER,
+    SHAPE_SPHERE,
+)
+from .vec import xform_point, xform_vector
+
+#: Transmittance below which a shadow ray counts as blocked.
+SHADOW_CUTOFF = 1e-4
 
 
 @njit
@@ -156,3 +174,98 @@ def occluder(geo, o, d, t_min, t_max, stack, time):
 def any_hit(geo, o, d, t_min, t_max, stack, time):
     """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
     return occluder(geo, o, d, t_min, t_max, stack, time)[0]
+
+
+@njit
+def _shape_factor(geo, materials, s, o, d, t_max, time):
+    """What shape s lets through along o + t·d, 0 < t < t_max: (kt0, kt1, kt2, settled). An opaque shape that
+    the ray meets gives 0; a transparent convex solid (sphere, box, capped cylinder or cone) gives its kt where
+    the ray enters it (its span along the whole line starts inside the segment), a transparent planar one
+    (plane, disk, rect) its kt where the ray crosses it; an emitter lets everything through. settled is False
+    for a transparent shape of another kind on the ray (csg, open cylinder or cone): only the hit-by-hit walk
+    knows how often the ray crosses it."""
+    info = geo.shape_info[s]
+    if info[INFO_LIGHT] >= 0:
+        return 1.0, 1.0, 1.0, True
+    mat = np.int64(info[INFO_MATERIAL])
+    kt0, kt1, kt2 = materials[mat, MAT_KT], materials[mat, MAT_KT + 1], materials[mat, MAT_KT + 2]
+    kind = info[INFO_KIND]
+    convex = kind == SHAPE_SPHERE or kind == SHAPE_BOX or (
+        (kind == SHAPE_CYLINDER or kind == SHAPE_CONE) and (info[INFO_FLAGS] & FLAG_CAPPED) != 0)
+    if (kt0 > 0.0 or kt1 > 0.0 or kt2 > 0.0) and convex:
+        m = geo.shape_xform[s]
+        if m[3, 3] != 0.0:  # moving: see _shape_hit
+            o = (o[0] - time * m[3, 0], o[1] - time * m[3, 1], o[2] - time * m[3, 2])
+        t_in, _, t_out, _ = solid_span(kind, xform_point(m, o), xform_vector(m, d))
+        if t_in < t_out and 0.0 < t_in < t_max:
+            return kt0, kt1, kt2, True
+        return 1.0, 1.0, 1.0, True
+    t, part, b1, b2 = _shape_hit(geo, s, o, d, 0.0, t_max, time)
+    if t == NO_HIT:
+        return 1.0, 1.0, 1.0, True
+    if kt0 <= 0.0 and kt1 <= 0.0 and kt2 <= 0.0:
+        return 0.0, 0.0, 0.0, True
+    return kt0, kt1, kt2, kind != SHAPE_CSG and kind != SHAPE_CYLINDER and kind != SHAPE_CONE
+
+
+@njit
+def transmittance(geo, tri_info, materials, o, d, t_max, stack, time):
+    """What reaches o from t_max along d, through everything on the ray with 0 < t < t_max: ((r, g, b), settled).
+
+    The product of what each primitive lets through (`_shape_factor`; a triangle: its kt if it is crossed, 0 if
+    it is opaque), in any order, so one any-order traversal settles it, and it stops at the first opaque
+    primitive. settled is False when a primitive only the hit-by-hit walk can count is on the ray (see
+    `illumination.shadow_transmittance`). `tri_info` and `materials` are the triangles' and materials' arrays."""
+    tr, tg, tb = 1.0, 1.0, 1.0
+    for k in range(geo.unbounded.shape[0]):
+        f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(geo.unbounded[k]), o, d, t_max, time)
+        if not settled:
+            return (tr, tg, tb), False
+        tr, tg, tb = tr * f0, tg * f1, tb * f2
+        if max(tr, tg, tb) < SHADOW_CUTOFF:
+            return (0.0, 0.0, 0.0), True
+    box = geo.node_box
+    link = geo.node_link
+    if box.shape[0] == 0:
+        return (tr, tg, tb), True
+    rb = box_setup(o, d)
+    setup = triangle_setup(d)
+    node = np.int64(0)
+    if intersect_node_box(box, node, rb, t_max) == NO_HIT:
+        return (tr, tg, tb), True
+    sp = 0
+    while True:
+        count = link[node, NODE_COUNT]
+        if count > 0:
+            first = link[node, NODE_FIRST]
+            for k in range(first, first + count):
+                r = geo.prim_ref[k]
+                if r >= 0:
+                    t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)
+                    if t <= 0.0 or tri_info[r, INFO_LIGHT] >= 0:
+                        continue
+                    mat = np.int64(tri_info[r, INFO_MATERIAL])
+                    f0, f1, f2 = materials[mat, MAT_KT], materials[mat, MAT_KT + 1], materials[mat, MAT_KT + 2]
+                else:
+                    f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(~r), o, d, t_max, time)
+                    if not settled:
+                        return (tr, tg, tb), False
+                tr, tg, tb = tr * f0, tg * f1, tb * f2
+                if max(tr, tg, tb) < SHADOW_CUTOFF:
+                    return (0.0, 0.0, 0.0), True
+        else:
+            c = np.int64(link[node, NODE_FIRST])
+            hit_left = intersect_node_box(box, c, rb, t_max) != NO_HIT
+            hit_right = intersect_node_box(box, c + 1, rb, t_max) != NO_HIT
+            if hit_left and hit_right:
+                node = c
+                stack[sp] = c + 1
+                sp += 1
+                continue
+            if hit_left or hit_right:
+                node = c if hit_left else c + 1
+                continue
+        if sp == 0:
+            return (tr, tg, tb), True
+        sp -= 1
+        node = stack[sp]
