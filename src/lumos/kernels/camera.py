@@ -9,14 +9,14 @@ With one sample per pixel the pixel centre is used (jx = jy = 0.5); otherwise `s
 Random dimensions 0–1 place the sample in the pixel, 2–3 on the lens.
 """
 
-from .jit import njit
+from .jit import njit, njit_inline
 from .layout import CAM_APERTURE, CAM_FOCUS, CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d
 from .vec import madd, mul, normalize, row3, sub
 
 
-@njit
+@njit_inline
 def camera_ray(cam_vecs, cam_params, width, height, x, y, sample, spp, seed, pixel):
     """Origin and unit direction of sample `sample` of pixel (x, y)."""
     if spp == 1:
@@ -29,7 +29,7 @@ def camera_ray(cam_vecs, cam_params, width, height, x, y, sample, spp, seed, pix
     return camera_ray_at(cam_vecs, cam_params, width, height, x + jx, y + jy, lx, ly)
 
 
-@njit
+@njit_inline
 def camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly):
     """The ray through the image point (fx, fy) in pixel units (pixel (x, y) spans [x, x+1) × [y, y+1)), through
     the point (lx, ly) ∈ [0, 1)² of the lens (mapped onto the aperture disk; unused by a pinhole)."""

@@ -46,7 +46,7 @@ from .intersect import (
     sphere_roots,
     triangle_setup,
 )
-from .jit import njit, njit_alloc
+from .jit import njit, njit_alloc, njit_inline
 from .layout import (
     INFO_COUNT,
     INFO_KIND,
@@ -150,7 +150,7 @@ def _axial_span(o, d, cone):
     return lo, p_lo, hi, p_hi
 
 
-@njit
+@njit_inline
 def solid_span(kind, o, d):
     """(t_in, part_in, t_out, part_out) of the whole line o + t·d (object space) through a canonical convex
     solid: a sphere, a box, or a capped cylinder or cone; t_in = t_out = 0 if it misses."""

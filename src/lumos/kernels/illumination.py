@@ -15,7 +15,7 @@ let their kt through (`shadow_transmittance`); raycast passes False.
 import math
 
 from .. import config
-from .jit import njit
+from .jit import njit, njit_inline
 from .layout import (
     LIGHT_DIRECTIONAL,
     LIGHT_DISK,
@@ -60,7 +60,7 @@ DIM_LIGHTS = 16
 MAX_SHADOW_CROSSINGS = 32
 
 
-@njit
+@njit_inline
 def sample_light(lit, j, p, u1, u2):
     """One sample of light j seen from point p.
 
@@ -126,7 +126,7 @@ def phong(n, L, V, mat, Id, Is, w):
     return phong_coeffs(n, L, V, kd, ks, mat[MAT_SHININESS], Id, Is, w)
 
 
-@njit
+@njit_inline
 def phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w):
     """`phong` with the coefficients given as (r, g, b) tuples (a textured surface's, which vary per point)."""
     n_dot_l = dot(n, L)
@@ -154,7 +154,7 @@ def illuminate(lit, geo, surf, p, n, n_geo, V, mat_id, seed, pixel, sample, shad
                              shadows, stack, stack_t, time)
 
 
-@njit
+@njit_inline
 def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack,
                       stack_t, time):
     """The classic model with the coefficients given as (r, g, b) tuples (a textured surface's vary per point).
@@ -215,7 +215,7 @@ def is_solid(surf, ref):
     return False
 
 
-@njit
+@njit_inline
 def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
     """What reaches `origin` from a light at `dist` along L: (rgb factor, rays traced). Opaque objects (kt = 0)
     block; a transparent object multiplies by its kt each time the ray enters it if it is a solid, each time

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .jit import njit
+from .jit import njit, njit_inline
 from .layout import (
     SHAPE_BOX,
     SHAPE_CONE,
@@ -288,7 +288,7 @@ def _planar(o, d, t_min, t_max, kind):
     return (t, 0) if (0.0 <= x <= 1.0 and 0.0 <= y <= 1.0) else (NO_HIT, 0)
 
 
-@njit
+@njit_inline
 def intersect_shape(kind, capped, xform, o_world, d_world, t_min, t_max):
     """Intersect an analytic shape given by its kind and object_from_world matrix (3, 4). Returns (t, part)."""
     o = xform_point(xform, o_world)

@@ -46,10 +46,15 @@ if os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0"):
 #: they need no reference counts. With the runtime, each call that is not inlined increments and decrements the
 #: count of every array in its tuple arguments (30 calls on entry and 30 on exit for `whitted.trace`), which took a
 #: quarter of the ray tracers' time (perf: NRT_incref, NRT_decref) and bounced shared counters between cores.
-njit = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+njit = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False, forceinline=False)
+#: Device functions on the per-ray path that are inlined into their callers (LLVM alwaysinline). Numba passes
+#: every array of a namedtuple argument as its own fields (`closest_hit` takes 96 machine arguments,
+#: `illuminate_coeffs` 220), most of them on the stack, at each call that is not inlined.
+njit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False, forceinline=True)
 #: Helpers that allocate arrays (BVH build, raster bins, scratch buffers, csg crossing lists): with the runtime,
 #: said explicitly, since a function called from a device function would otherwise inherit its "no runtime".
-njit_alloc = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=True)
+njit_alloc = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=True, forceinline=False)
 #: Top-level kernels run with prange over rows or tiles.
-njit_parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy", _nrt=True)
+njit_parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy", _nrt=True,
+                           forceinline=False)
 prange = numba.prange

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from .csg import csg_leaf
-from .jit import njit
+from .jit import njit, njit_inline
 from .layout import (
     FLAG_NORMALS,
     FLAG_READS_UV,
@@ -34,7 +34,7 @@ from .vec import cross, dot, madd, normalize, sub, xform_normal, xform_point
 _INV_2PI = 0.5 / math.pi
 
 
-@njit
+@njit_inline
 def _canonical_normal_uv(kind, part, p, want_uv):
     """Object-space normal (not unit) and (u, v) on a canonical shape at point p; (u, v) = (0, 0) for the sphere
     and the sides of cylinders and cones unless `want_uv` (their uv costs an atan2, a tenth of a hit's time)."""
@@ -69,7 +69,7 @@ def _canonical_normal_uv(kind, part, p, want_uv):
     return (0.0, 0.0, 1.0), 0.5 + 0.5 * p[0], 0.5 + 0.5 * p[1]  # disk
 
 
-@njit
+@njit_inline
 def surface_at(surf, o, d, t, ref, b1, b2, part, time):
     """Returns (p, n_geometric, n_shading, u, v, material_id, object_id, light_id) for a hit (`surf` is a
     `layout.Surfaces`).

@@ -62,7 +62,7 @@ import math
 import numpy as np
 
 from .csg import csg_leaf
-from .jit import njit
+from .jit import njit, njit_inline
 from .layout import (
     FLAG_UVS,
     INFO_FLAGS,
@@ -249,7 +249,7 @@ def noise01(s, t, period_s, period_t):
 # ------------------------------------------------------------------------------------------------ material
 
 
-@njit
+@njit_inline
 def material_coeffs(tex, mat, u, v, p):
     """(ka, kd, ks, kr), each an RGB tuple: the material row's coefficients, with those named by its texture's
     apply_to mask replaced by the texture colour at (u, v). No texture: the row's own values."""

@@ -10,7 +10,7 @@ import numpy as np
 
 from .csg import intersect_csg, solid_span
 from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
-from .jit import njit
+from .jit import njit, njit_inline
 from .layout import (
     FLAG_CAPPED,
     INFO_FLAGS,
@@ -32,7 +32,7 @@ from .vec import xform_point, xform_vector
 SHADOW_CUTOFF = 1e-4
 
 
-@njit
+@njit_inline
 def _shape_hit(geo, s, o, d, t_min, t_max, time):
     """(t, part, b1, b2) of shape s; b1 and b2 are 0 except for csg objects (see `kernels.csg`)."""
     info = geo.shape_info[s]
@@ -45,7 +45,7 @@ def _shape_hit(geo, s, o, d, t_min, t_max, time):
     return t, part, 0.0, 0.0
 
 
-@njit
+@njit_inline
 def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     """Nearest intersection with t_min < t < t_max at shutter time `time`; `geo` is a `layout.Geometry`.
 
@@ -176,7 +176,7 @@ def any_hit(geo, o, d, t_min, t_max, stack, time):
     return occluder(geo, o, d, t_min, t_max, stack, time)[0]
 
 
-@njit
+@njit_inline
 def _shape_factor(geo, materials, s, o, d, t_max, time):
     """What shape s lets through along o + t·d, 0 < t < t_max: (kt0, kt1, kt2, settled). An opaque shape that
     the ray meets gives 0; a transparent convex solid (sphere, box, capped cylinder or cone) gives its kt where
@@ -208,7 +208,7 @@ def _shape_factor(geo, materials, s, o, d, t_max, time):
     return kt0, kt1, kt2, kind != SHAPE_CSG and kind != SHAPE_CYLINDER and kind != SHAPE_CONE
 
 
-@njit
+@njit_inline
 def transmittance(geo, tri_info, materials, o, d, t_max, stack, time):
     """What reaches o from t_max along d, through everything on the ray with 0 < t < t_max: ((r, g, b), settled).
 

@@ -31,7 +31,7 @@ from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray, camera_ray_at
 from ..kernels.illumination import illuminate_coeffs, is_solid
-from ..kernels.jit import njit, njit_alloc, njit_parallel, prange
+from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from ..kernels.layout import (
     LIGHT_SPHERE,
     MAT_EMISSION,
@@ -92,7 +92,7 @@ def _push(st_f, st_i, st_mo, st_mi, sp, o, d, w0, w1, w2, depth, n_media, src_mo
     return sp + 1
 
 
-@njit
+@njit_inline
 def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scratch, background):
     """Radiance along the camera ray (o, d) at shutter time `time`.
 
@@ -255,7 +255,7 @@ def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
         rays_per_row[y] += rays
 
 
-@njit
+@njit_inline
 def _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, fx, fy, seed, key, sample, max_depth,
            scratch, background):
     """The radiance through image point (fx, fy); `key` and `sample` index its random numbers (lens, time)."""
