@@ -2,6 +2,7 @@
 
     python benchmarks/bench_whitted.py [--width 1024] [--height 768] [--threads 2] [--repeats 3]
                                        [--out /tmp/bench_whitted] [--lumos-method whitted] [--numba-cache DIR]
+                                       [--plain-main]
 
 Setup (Debian, as root), besides `pip install -e .`:
 
@@ -70,8 +71,15 @@ POV_FIGURES = {
 }
 
 
-def lumos_command() -> list[str]:
-    """The `lumos` script of this Python environment (else `python -m lumos`)."""
+#: `--plain-main`: the command's `main` called from `python -c`, so the process keeps Python's cyclic garbage
+#: collector and tears the interpreter down at exit, which the `lumos` script (`lumos.cli.run`) skips.
+PLAIN_MAIN = [sys.executable, "-c", "import sys; from lumos.cli import main; sys.exit(main(sys.argv[1:]))"]
+
+
+def lumos_command(plain_main: bool = False) -> list[str]:
+    """The `lumos` script of this Python environment (else `python -m lumos`), or PLAIN_MAIN."""
+    if plain_main:
+        return list(PLAIN_MAIN)
     script = Path(sys.executable).parent / "lumos"
     return [str(script)] if script.is_file() else [sys.executable, "-m", "lumos"]
 
@@ -98,11 +106,12 @@ def povray_once(out: Path, width: int, height: int, threads: int) -> dict:
     return figures
 
 
-def lumos_once(out: Path, cache: Path, width: int, height: int, threads: int, method: str) -> dict | None:
+def lumos_once(out: Path, cache: Path, width: int, height: int, threads: int, method: str,
+               plain_main: bool = False) -> dict | None:
     """One `lumos render` process; returns its `--stats` figures plus `wall_s`, or None if `method` is unknown."""
     stats = out / "lumos.json"
     stats.unlink(missing_ok=True)
-    cmd = lumos_command() + ["render", str(SCENE), "-o", str(out / "lumos.png"), "--width", str(width),
+    cmd = lumos_command(plain_main) + ["render", str(SCENE), "-o", str(out / "lumos.png"), "--width", str(width),
                              "--height", str(height), "--antialias", "adaptive", "--threads", str(threads),
                              "--method", method, "--stats", str(stats), "-q"]
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
@@ -148,6 +157,9 @@ def main():
     ap.add_argument("--repeats", type=int, default=3, help="timed runs of each, alternating")
     ap.add_argument("--out", default="/tmp/bench_whitted")
     ap.add_argument("--lumos-method", default="whitted", help="lumos method to time (default whitted)")
+    ap.add_argument("--plain-main", action="store_true",
+                    help="time lumos through `python -c ... main()` instead of the lumos script: with the cyclic "
+                         "GC on and a normal interpreter exit")
     ap.add_argument("--numba-cache", help="NUMBA_CACHE_DIR for lumos (default: a fresh empty folder, so the "
                                           "untimed first run is a cold start)")
     args = ap.parse_args()
@@ -171,7 +183,7 @@ def main():
         for _ in range(args.repeats):
             povs.append(povray_once(out, W, H, T))
             if first is not None:
-                lumoses.append(lumos_once(out, cache, W, H, T, args.lumos_method))
+                lumoses.append(lumos_once(out, cache, W, H, T, args.lumos_method, args.plain_main))
 
     print(f"\n$ {povs[0]['command']}")
     print(f"POV-Ray wall s: {_seconds(q['wall_s'] for q in povs)}; its own Trace Time s: "

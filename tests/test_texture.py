@@ -530,8 +530,8 @@ def test_triangle_tangents_match_finite_differences(rng, with_uvs):
 
 def test_degenerate_tangents_fall_back_to_an_orthonormal_frame():
     """At a sphere's pole ∂p/∂u vanishes: the tangents become an orthonormal pair around n with t × b = n."""
-    arrays = compile_dict({"materials": {"checks": {"texture": {"type": "checker"}}},
-                           "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 2.0, "material": "checks"}]}).arrays
+    sphere = {"type": "sphere", "center": [0, 0, 0], "radius": 2.0, "material": "checks"}
+    arrays = compile_dict({"materials": {"checks": {"texture": {"type": "checker"}}}, "objects": [sphere]}).arrays
     hit = surfaces(arrays, [[0.0, 5.0, 0.0]], [[0.0, -1.0, 0.0]])[0]
     assert hit["v"] == pytest.approx(1.0)
     t, b = tangents(arrays, hit)

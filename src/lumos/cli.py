@@ -36,8 +36,9 @@ def run() -> None:
     Python's cyclic garbage collector is off (reference counting still frees every image buffer; what it would
     find are the small cycles that imports and Numba's type registries leave), and the process ends with
     os._exit once the output is written and closed and stdout and stderr are flushed, skipping the interpreter's
-    teardown of the Numba and LLVM objects. Measured on Whitted's scene at 1024x768 (bench_whitted.py): 0.09 s of
-    collections and 0.14 s of teardown in a 1.48 s process. In-process callers use `main`, which does neither."""
+    teardown of the Numba and LLVM objects: together 0.2 s of a 1.4 s render of Whitted's scene at 1024x768
+    (bench_whitted.py, 1.41 -> 1.21 s; `--plain-main` times it without). In-process callers use `main`, which
+    does neither."""
     gc.disable()
     code = main()
     sys.stdout.flush()

@@ -46,6 +46,8 @@ if os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0"):
 #: they need no reference counts. With the runtime, each call that is not inlined increments and decrements the
 #: count of every array in its tuple arguments (30 calls on entry and 30 on exit for `whitted.trace`), which took a
 #: quarter of the ray tracers' time (perf: NRT_incref, NRT_decref) and bounced shared counters between cores.
+#: (`_nrt` is the option Numba's own `register_jitable(_nrt=False)` uses.) Every decorator here states `_nrt` and
+#: `forceinline`: an option a function does not state is inherited from the caller being compiled.
 njit = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False, forceinline=False)
 #: Device functions on the per-ray path that are inlined into their callers (LLVM alwaysinline). Numba passes
 #: every array of a namedtuple argument as its own fields (`closest_hit` takes 96 machine arguments,
