@@ -1,4 +1,5 @@
-"""BVH traversal: closest hit and any hit, with a fixed stack supplied by the caller (one per thread/row).
+"""BVH traversal: closest hit, any hit and shadow-ray transmittance, with a fixed stack supplied by the caller (one
+per thread/row).
 
 Children are stored next to each other: at an interior node both child boxes are tested, the nearer is visited
 first and the farther pushed with its entry distance, so a popped node is skipped once a closer hit is known.
@@ -121,69 +122,35 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
 
 
 @njit
-def occluder(geo, o, d, t_min, t_max, stack, time):
-    """(True, ref) for some primitive on the ray with t_min < t < t_max (the first the traversal meets, not
-    necessarily the nearest); (False, 0) if there is none. ref as in `closest_hit`."""
-    for k in range(geo.unbounded.shape[0]):
-        t, part, b1, b2 = _shape_hit(geo, np.int64(geo.unbounded[k]), o, d, t_min, t_max, time)
-        if t != NO_HIT:
-            return True, ~np.int64(geo.unbounded[k])
-    box = geo.node_box
-    link = geo.node_link
-    if box.shape[0] == 0:
-        return False, np.int64(0)
-    rb = box_setup(o, d)
-    setup = triangle_setup(d)
-    node = np.int64(0)
-    if intersect_node_box(box, node, rb, t_max) == NO_HIT:
-        return False, np.int64(0)
-    sp = 0
-    while True:
-        count = link[node, NODE_COUNT]
-        if count > 0:
-            first = link[node, NODE_FIRST]
-            for k in range(first, first + count):
-                r = geo.prim_ref[k]
-                if r >= 0:
-                    t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)
-                    if t > t_min:
-                        return True, np.int64(r)
-                else:
-                    t, part, b1, b2 = _shape_hit(geo, np.int64(~r), o, d, t_min, t_max, time)
-                    if t != NO_HIT:
-                        return True, np.int64(r)
-        else:
-            c = np.int64(link[node, NODE_FIRST])
-            hit_left = intersect_node_box(box, c, rb, t_max) != NO_HIT
-            hit_right = intersect_node_box(box, c + 1, rb, t_max) != NO_HIT
-            if hit_left and hit_right:
-                node = c
-                stack[sp] = c + 1
-                sp += 1
-                continue
-            if hit_left or hit_right:
-                node = c if hit_left else c + 1
-                continue
-        if sp == 0:
-            return False, np.int64(0)
-        sp -= 1
-        node = stack[sp]
-
-
-@njit
 def any_hit(geo, o, d, t_min, t_max, stack, time):
-    """True if anything lies on the ray with t_min < t < t_max (shadow rays)."""
-    return occluder(geo, o, d, t_min, t_max, stack, time)[0]
+    """True if anything lies on the ray with t_min < t < t_max (hit testing; shadow rays use `transmittance`,
+    which lets light through transparent objects)."""
+    rgb, settled = _pass_through(geo, None, None, o, d, t_min, t_max, stack, time)
+    return rgb[0] == 0.0
 
 
 @njit_inline
-def _shape_factor(geo, materials, s, o, d, t_max, time):
-    """What shape s lets through along o + t·d, 0 < t < t_max: (kt0, kt1, kt2, settled). An opaque shape that
-    the ray meets gives 0; a transparent convex solid (sphere, box, capped cylinder or cone) gives its kt where
-    the ray enters it (its span along the whole line starts inside the segment), a transparent planar one
+def transmittance(geo, tri_info, materials, o, d, t_max, stack, time):
+    """What reaches o from t_max along d, through everything on the ray with 0 < t < t_max: ((r, g, b), settled).
+
+    The product of what each primitive lets through (`_shape_factor`; a triangle: its kt if it is crossed, 0 if
+    it is opaque), in any order, so one any-order traversal settles it, and it stops at the first opaque
+    primitive. settled is False when a primitive only the hit-by-hit walk can count is on the ray (see
+    `illumination.shadow_transmittance`). `tri_info` and `materials` are the triangles' and materials' arrays."""
+    return _pass_through(geo, tri_info, materials, o, d, 0.0, t_max, stack, time)
+
+
+@njit_inline
+def _shape_factor(geo, materials, s, o, d, t_min, t_max, time):
+    """What shape s lets through along o + t·d, t_min < t < t_max: (kt0, kt1, kt2, settled). An opaque shape
+    that the ray meets gives 0; a transparent convex solid (sphere, box, capped cylinder or cone) gives its kt
+    where the ray enters it (its span along the whole line starts inside the segment), a transparent planar one
     (plane, disk, rect) its kt where the ray crosses it; an emitter lets everything through. settled is False
     for a transparent shape of another kind on the ray (csg, open cylinder or cone): only the hit-by-hit walk
-    knows how often the ray crosses it."""
+    knows how often the ray crosses it. With `materials` None every shape is opaque (`any_hit`)."""
+    if materials is None:
+        t, part, b1, b2 = _shape_hit(geo, s, o, d, t_min, t_max, time)
+        return (1.0, 1.0, 1.0, True) if t == NO_HIT else (0.0, 0.0, 0.0, True)
     info = geo.shape_info[s]
     if info[INFO_LIGHT] >= 0:
         return 1.0, 1.0, 1.0, True
@@ -197,10 +164,10 @@ def _shape_factor(geo, materials, s, o, d, t_max, time):
         if m[3, 3] != 0.0:  # moving: see _shape_hit
             o = (o[0] - time * m[3, 0], o[1] - time * m[3, 1], o[2] - time * m[3, 2])
         t_in, _, t_out, _ = solid_span(kind, xform_point(m, o), xform_vector(m, d))
-        if t_in < t_out and 0.0 < t_in < t_max:
+        if t_in < t_out and t_min < t_in < t_max:
             return kt0, kt1, kt2, True
         return 1.0, 1.0, 1.0, True
-    t, part, b1, b2 = _shape_hit(geo, s, o, d, 0.0, t_max, time)
+    t, part, b1, b2 = _shape_hit(geo, s, o, d, t_min, t_max, time)
     if t == NO_HIT:
         return 1.0, 1.0, 1.0, True
     if kt0 <= 0.0 and kt1 <= 0.0 and kt2 <= 0.0:
@@ -209,16 +176,23 @@ def _shape_factor(geo, materials, s, o, d, t_max, time):
 
 
 @njit_inline
-def transmittance(geo, tri_info, materials, o, d, t_max, stack, time):
-    """What reaches o from t_max along d, through everything on the ray with 0 < t < t_max: ((r, g, b), settled).
+def _triangle_factor(tri_info, materials, r):
+    """What triangle r lets through where a ray crosses it (see `_shape_factor`)."""
+    if materials is None:
+        return 0.0, 0.0, 0.0
+    if tri_info[r, INFO_LIGHT] >= 0:
+        return 1.0, 1.0, 1.0
+    mat = np.int64(tri_info[r, INFO_MATERIAL])
+    return materials[mat, MAT_KT], materials[mat, MAT_KT + 1], materials[mat, MAT_KT + 2]
 
-    The product of what each primitive lets through (`_shape_factor`; a triangle: its kt if it is crossed, 0 if
-    it is opaque), in any order, so one any-order traversal settles it, and it stops at the first opaque
-    primitive. settled is False when a primitive only the hit-by-hit walk can count is on the ray (see
-    `illumination.shadow_transmittance`). `tri_info` and `materials` are the triangles' and materials' arrays."""
+
+@njit_inline
+def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
+    """The traversal behind `transmittance` and `any_hit`: every primitive on the ray with t_min < t < t_max, in
+    traversal order, multiplied in; it stops as soon as the product is (as good as) 0. ((r, g, b), settled)."""
     tr, tg, tb = 1.0, 1.0, 1.0
     for k in range(geo.unbounded.shape[0]):
-        f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(geo.unbounded[k]), o, d, t_max, time)
+        f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(geo.unbounded[k]), o, d, t_min, t_max, time)
         if not settled:
             return (tr, tg, tb), False
         tr, tg, tb = tr * f0, tg * f1, tb * f2
@@ -242,12 +216,11 @@ def transmittance(geo, tri_info, materials, o, d, t_max, stack, time):
                 r = geo.prim_ref[k]
                 if r >= 0:
                     t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)
-                    if t <= 0.0 or tri_info[r, INFO_LIGHT] >= 0:
+                    if t <= t_min:
                         continue
-                    mat = np.int64(tri_info[r, INFO_MATERIAL])
-                    f0, f1, f2 = materials[mat, MAT_KT], materials[mat, MAT_KT + 1], materials[mat, MAT_KT + 2]
+                    f0, f1, f2 = _triangle_factor(tri_info, materials, r)
                 else:
-                    f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(~r), o, d, t_max, time)
+                    f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(~r), o, d, t_min, t_max, time)
                     if not settled:
                         return (tr, tg, tb), False
                 tr, tg, tb = tr * f0, tg * f1, tb * f2
