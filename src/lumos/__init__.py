@@ -9,11 +9,11 @@
 """
 
 from .api import render
-from .errors import LumosError
+from .errors import LumosError, LumosWarning
 from .scene import Scene, load_scene
 
 __version__ = "0.1.0"
-__all__ = ["Image", "LumosError", "Scene", "__version__", "load_scene", "render"]
+__all__ = ["Image", "LumosError", "LumosWarning", "Scene", "__version__", "load_scene", "render"]
 
 
 def __getattr__(name: str):

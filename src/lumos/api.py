@@ -10,11 +10,12 @@ Methods are found by name in `METHODS` (one module each under `lumos.methods`).
 
 from __future__ import annotations
 
+import sys
 import time
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, Optional
 
 from .errors import LumosError
-from .scene.model import RenderSettings, Scene
+from .scene.model import PATH_AOVS, RenderSettings, Scene
 
 if TYPE_CHECKING:
     from .image import Image
@@ -24,6 +25,7 @@ METHODS: dict[str, str] = {
     "raycast": "lumos.methods.raycast:render_raycast",
     "raster": "lumos.methods.raster:render_raster",
     "whitted": "lumos.methods.whitted:render_whitted",
+    "path": "lumos.methods.path:render_path",
 }
 
 _SETTING_KEYS = tuple(RenderSettings.model_fields)
@@ -50,7 +52,29 @@ def resolve_settings(scene: Scene, overrides: dict[str, Any]) -> RenderSettings:
         raise LumosError(format_validation_error(exc, source="settings", prefix=("render",))) from None
     if settings.method not in METHODS:
         raise LumosError(f"render.method: unknown method {settings.method!r} (choose from {', '.join(METHODS)})")
+    check_method_settings(settings)
     return settings
+
+
+def check_method_settings(settings: RenderSettings) -> None:
+    """Refuse, with a clear error, a setting the chosen method cannot honour (a path-only setting elsewhere...)."""
+    method = settings.method
+    if method != "path":
+        path_only = [("time_limit", settings.time_limit is not None, "--time-limit"),
+                     ("denoise", settings.denoise, "--denoise"),
+                     ("filter", settings.filter != "box", "--filter"),
+                     ("sampling", settings.sampling != "mis", "--sampling")]
+        for key, given, flag in path_only:
+            if given:
+                raise LumosError(f"render.{key}: {flag} is a path feature; method {method} does not take it")
+        for name in PATH_AOVS:
+            if name in settings.aov:
+                raise LumosError(f"render.aov: the {name!r} AOV is made by method path only")
+    elif settings.antialias == "adaptive":
+        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; path takes none (pixel "
+                         "centres) or supersample (spp samples spread over each pixel by the filter)")
+    if "noisy" in settings.aov and not settings.denoise:
+        raise LumosError("render.aov: the 'noisy' AOV is the image before denoising; it needs denoise (--denoise)")
 
 
 def _entry_point(name: str) -> Callable:
@@ -60,14 +84,21 @@ def _entry_point(name: str) -> Callable:
     return getattr(importlib.import_module(module), func)
 
 
-def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] = False, **settings) -> "Image":
+def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] = False,
+           on_pass: Optional[Callable[["Image"], None]] = None, **settings) -> "Image":
     """Render `scene` (a Scene, a dict or a path) and return an `Image`.
 
     `settings` override the scene's `render:` block: method, width, height, spp, max_depth, seed, shading,
-    exposure, threads, aov. `progress=True` shows a progress bar on stderr for renders that take over about
-    a second; a callable receives the finished fraction instead.
+    exposure, threads, aov, and the path tracer's time_limit, filter, sampling and denoise. `progress=True` shows
+    a progress bar on stderr for renders that take over about a second (and says so when the kernels are being
+    compiled, on a first run); a callable receives the finished fraction instead. `on_pass(image)` (method path)
+    receives the image after each pass of samples, e.g. to write checkpoints.
+
+    `stats` holds the timings: load_s, build_s (flatten + BVH), render_s and total_s, and jit_s, the time
+    Numba spent compiling kernels (a first run only), which build_s and render_s exclude.
     """
     from .compile import compile_scene
+    from .compiling import ESTIMATE_S, watch_compiles
     from .image import Image
     from .progress import make_progress
     from .scene.loader import load_scene
@@ -77,16 +108,33 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
         scene = load_scene(scene)
     t_load = time.perf_counter()
     cfg = resolve_settings(scene, settings)
-    try:
-        compiled = compile_scene(scene, cfg)
-    except LumosError as exc:  # the compile step knows the key path, not the file: name it
-        if scene.source is not None and not str(exc).startswith(str(scene.source)):
-            raise LumosError(f"{scene.source}: {exc}") from None
-        raise
-    t_build = time.perf_counter()
-    with make_progress(progress) as report:
-        film = _entry_point(cfg.method)(compiled, scene.camera, cfg, progress=report)
-    t_render = time.perf_counter()
+    if cfg.denoise:
+        from .denoise import require
+
+        require()
+
+    def say_compiling():
+        if progress is True:
+            print(f"lumos: compiling kernels, once: about {ESTIMATE_S.get(cfg.method, 40)} s "
+                  "(they are cached for the next runs)", file=sys.stderr, flush=True)
+
+    with watch_compiles(on_first=say_compiling) as watch:
+        try:
+            compiled = compile_scene(scene, cfg)
+        except LumosError as exc:  # the compile step knows the key path, not the file: name it
+            if scene.source is not None and not str(exc).startswith(str(scene.source)):
+                raise LumosError(f"{scene.source}: {exc}") from None
+            raise
+        t_build = time.perf_counter()
+        jit_build = watch.seconds
+        kwargs = {}
+        if on_pass is not None and cfg.method == "path":
+            kwargs["on_pass"] = lambda film: on_pass(Image(film.radiance, aovs=film.aovs, exposure=cfg.exposure,
+                                                           stats=dict(film.extra)))
+        with make_progress(progress) as report:
+            film = _entry_point(cfg.method)(compiled, scene.camera, cfg, progress=report, **kwargs)
+        t_render = time.perf_counter()
+    render_s = max(t_render - t_build - (watch.seconds - jit_build), 0.0)
     stats = {
         "method": cfg.method,
         "width": cfg.width,
@@ -94,14 +142,16 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
         "spp": cfg.spp,
         "threads": film.threads,
         "load_s": t_load - t0,
-        "build_s": t_build - t_load,
+        "build_s": max(t_build - t_load - jit_build, 0.0),
         "bvh_build_s": compiled.bvh_build_s,
-        "render_s": t_render - t_build,
+        "render_s": render_s,
+        "jit_s": watch.seconds,
         "total_s": t_render - t0,
         "rays": int(film.rays),
         "primary_rays": int(film.primary_rays),
-        "mrays_per_s": film.rays / max(t_render - t_build, 1e-9) / 1e6,
+        "mrays_per_s": film.rays / max(render_s, 1e-9) / 1e6,
     }
+    stats.update(film.extra)
     return Image(film.radiance, aovs=film.aovs, stats=stats, exposure=cfg.exposure)
 
 

@@ -19,15 +19,19 @@ import os
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
 from . import __version__
-from .errors import LumosError
+from .errors import LumosError, LumosWarning
 
 #: render flags that override the scene's `render:` block (argparse dest == setting name).
 SETTING_FLAGS = ("method", "shading", "width", "height", "spp", "max_depth", "seed", "threads", "exposure", "aov",
-                 "antialias")
+                 "antialias", "time_limit", "denoise", "filter", "sampling")
+#: The methods, for the help text (kept in step with `api.METHODS` by a test).
+METHOD_HELP = ("raycast (ray casting), raster (scan-line, z-buffer), whitted (recursive ray tracing) or path "
+               "(path tracing, global illumination)")
 
 
 def run() -> None:
@@ -57,7 +61,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         if args.command in ("render", "sheet"):
             _skip_numba_blas_probe()
-        return args.run(args, started) or 0
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", LumosWarning)
+            warnings.showwarning = _show_warning
+            return args.run(args, started) or 0
     except LumosError as exc:
         print(f"lumos: error: {_one_line(str(exc))}", file=sys.stderr)
         return 2
@@ -70,6 +77,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"lumos: internal error: {type(exc).__name__}: {_one_line(str(exc))}", file=sys.stderr)
         print("lumos: this is a bug in lumos; rerun with LUMOS_DEBUG=1 to see the traceback", file=sys.stderr)
         return 1
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line each on stderr: `lumos: warning: <message>` (lumos's own) or the usual form."""
+    if issubclass(category, LumosWarning):
+        print(f"lumos: warning: {_one_line(str(message))}", file=sys.stderr)
+    else:
+        print(warnings.formatwarning(message, category, filename, lineno, line).rstrip(), file=sys.stderr)
 
 
 def _skip_numba_blas_probe() -> None:
@@ -103,18 +118,31 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
     render.add_argument("-o", "--output", metavar="OUT", help="image to write: .png, .exr, .pfm or .npy "
                         "(default: <scene name>.png in the current folder)")
-    render.add_argument("--method", metavar="M", help="rendering method: raycast or raster")
+    render.add_argument("--method", metavar="M", help=f"rendering method: {METHOD_HELP}")
     render.add_argument("--shading", metavar="S", help="flat, gouraud or phong (method raster)")
     render.add_argument("--width", type=int, metavar="W", help="image width in pixels")
     render.add_argument("--height", type=int, metavar="H", help="image height in pixels")
     render.add_argument("--spp", type=int, metavar="N", help="samples per pixel")
-    render.add_argument("--max-depth", type=int, metavar="D", help="bounces of secondary rays (0 = none)")
+    render.add_argument("--max-depth", type=int, metavar="D", help="bounces after the first hit (whitted: secondary "
+                        "rays, default 5; path: 0 = direct light only, default unbounded)")
     render.add_argument("--antialias", metavar="A", help="none, supersample (spp jittered samples) or adaptive")
     render.add_argument("--seed", type=int, metavar="S", help="random seed")
     render.add_argument("--threads", type=int, metavar="T", help="worker threads (default: all cores)")
     render.add_argument("--exposure", type=float, metavar="E", help="exposure multiplier for PNG output")
     render.add_argument("--aov", action="extend", nargs="+", metavar="NAME",
-                        help="also write these buffers beside OUT: depth, normal, albedo, object_id, samples")
+                        help="also write these buffers beside OUT: depth, normal, albedo, object_id, samples; "
+                        "path also variance (of each pixel's mean) and noisy (the image before --denoise)")
+    path = render.add_argument_group("path tracing (--method path)")
+    path.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass of samples that "
+                      "crosses this time; the image holds the samples taken so far (Ctrl-C also stops after the "
+                      "current pass)")
+    path.add_argument("--checkpoint-every", type=float, metavar="SECONDS", help="rewrite OUT with the samples so "
+                      "far at most this often, so that a killed render leaves a valid image")
+    path.add_argument("--denoise", action="store_const", const=True, help="denoise the final image with Intel Open "
+                      "Image Denoise (pip install pyoidn), guided by the albedo and normal AOVs")
+    path.add_argument("--filter", metavar="F", help="pixel filter: box (default) or gaussian")
+    path.add_argument("--sampling", metavar="S", help="direct light by mis (default: light and BSDF sampling, "
+                      "multiple importance sampling), light (light sampling only) or bsdf (BSDF sampling only)")
     render.add_argument("--stats", metavar="FILE.json", help="write timings and ray counts as JSON")
     render.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     render.set_defaults(run=run_render)
@@ -163,8 +191,15 @@ def run_render(args: argparse.Namespace, started: float) -> int:
     scene = load_scene(args.scene)
     load_s = time.perf_counter() - t0
     overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
-    api.resolve_settings(scene, overrides)  # bad flags fail here, before anything is compiled
-    img = api.render(scene, progress=not args.quiet, **overrides)
+    cfg = api.resolve_settings(scene, overrides)  # bad flags fail here, before anything is compiled
+    on_pass = None
+    if args.checkpoint_every is not None:
+        if cfg.method != "path":
+            raise LumosError(f"--checkpoint-every is a path feature; method {cfg.method} does not take it")
+        if not args.checkpoint_every > 0:
+            raise LumosError(f"--checkpoint-every: expected a positive number of seconds, got {args.checkpoint_every}")
+        on_pass = _checkpointer(out, args.checkpoint_every)
+    img = api.render(scene, progress=not args.quiet, on_pass=on_pass, **overrides)
     img.save(out)
     stats = dict(img.stats, load_s=load_s, total_s=time.perf_counter() - started)
     if args.stats:
@@ -172,6 +207,20 @@ def run_render(args: argparse.Namespace, started: float) -> int:
     if not args.quiet:
         print(f"lumos: {_summary(stats)} -> {out}", file=sys.stderr)
     return 0
+
+
+def _checkpointer(out: Path, every: float):
+    """An `on_pass` callback that saves the image so far to `out` (atomically) once `every` seconds have passed
+    since the last save."""
+    last = [time.perf_counter()]
+
+    def save(image) -> None:
+        now = time.perf_counter()
+        if now - last[0] >= every:
+            image.save(out)
+            last[0] = now
+
+    return save
 
 
 def run_info(args: argparse.Namespace, started: float) -> int:
@@ -225,11 +274,18 @@ def run_sheet(args: argparse.Namespace, started: float) -> int:
 
 
 def _summary(stats: dict) -> str:
-    """`raycast 640x480, 1 spp, 0.84 s (render 0.61 s), 307,200 rays, 0.50 Mrays/s`."""
+    """`raycast 640x480, 1 spp, 0.84 s (render 0.61 s), 307,200 rays, 0.50 Mrays/s`, and for a first run
+    `(... compiling kernels 17.3 s, once)`; a path render stopped early says after how many samples."""
+    spp = f"{stats.get('spp', '?')} spp"
+    if stats.get("stopped"):
+        spp += f" (stopped by the {stats['stopped']} after {stats.get('passes', '?')} passes)" \
+            if stats["stopped"] == "time limit" else f" (interrupted after {stats.get('passes', '?')} passes)"
+    jit = f", compiling kernels {stats['jit_s']:.1f} s, once" if stats.get("jit_s", 0.0) >= 0.5 else ""
+    bad = f", {stats['discarded_samples']:,} non-finite samples dropped" if stats.get("discarded_samples") else ""
     return (
         f"{stats.get('method', '?')} {stats.get('width', '?')}x{stats.get('height', '?')}, "
-        f"{stats.get('spp', '?')} spp, {stats['total_s']:.2f} s (render {stats.get('render_s', 0.0):.2f} s), "
-        f"{int(stats.get('rays', 0)):,} rays, {stats.get('mrays_per_s', 0.0):.2f} Mrays/s"
+        f"{spp}, {stats['total_s']:.2f} s (render {stats.get('render_s', 0.0):.2f} s{jit}), "
+        f"{int(stats.get('rays', 0)):,} rays, {stats.get('mrays_per_s', 0.0):.2f} Mrays/s{bad}"
     )
 
 

@@ -12,3 +12,8 @@ class LumosError(Exception):
 
 class SceneError(LumosError):
     """A scene file or dict that does not describe a valid scene."""
+
+
+class LumosWarning(UserWarning):
+    """Input that lumos can render but changes: a material that would create energy, a setting it ignores.
+    The CLI prints each as one line `lumos: warning: <message>` on stderr."""

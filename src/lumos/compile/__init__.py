@@ -32,6 +32,7 @@ class CompiledScene:
     bounds: np.ndarray  # (2, 3): min and max of everything bounded (planes excluded)
     object_names: list = field(default_factory=list)
     raster: Optional["RasterMesh"] = None  # the polygons, for method raster
+    emitters: Optional[L.Emitters] = None  # the lights and emissive primitives, for method path
 
 
 class _Materials:
@@ -211,7 +212,23 @@ def compile_scene(scene, settings=None) -> CompiledScene:
     lights = _lights(scene, materials, emitters)
     for kind, m, mat, i in emitters:
         shapes.add(kind, m, mat, len(scene.objects) + i, light=i)
-    return _assemble(scene, materials, shapes, tri_parts, lights, names)
+    compiled = _assemble(scene, materials, shapes, tri_parts, lights, names)
+    if settings is not None and settings.method == "path":
+        from .emitters import build_emitters, physical_materials
+
+        rows = physical_materials(_material_names(scene, materials), compiled.arrays.materials)
+        compiled.arrays = compiled.arrays._replace(materials=rows)
+        compiled.emitters = build_emitters(compiled.arrays, compiled.bounds)
+    return compiled
+
+
+def _material_names(scene, materials: _Materials) -> list[str]:
+    """A name for each material row, for messages: its key in `materials:` or the object that holds it inline."""
+    names = {id(m): repr(name) for name, m in scene.materials.items()}
+    for i, obj in enumerate(scene.objects):
+        if obj.material is not None and not isinstance(obj.material, str):
+            names.setdefault(id(obj.material), f"objects[{i}].material")
+    return [names.get(id(m), "(default)" if m is not None else "(light)") for m in materials.materials]
 
 
 def _compile_raster(scene, settings) -> CompiledScene:

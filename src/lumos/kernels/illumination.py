@@ -56,6 +56,9 @@ from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
 _INV_PI = 1.0 / math.pi
 #: Dimensions of the per-pixel random stream used by light sampling start here (camera/lens use 0..3, time 4).
 DIM_LIGHTS = 16
+#: A point within this factor of a sphere's radius squared counts as on it (rounding puts the sphere's own
+#: surface points on either side): the cone it subtends is empty, for sampling and for the pdf alike.
+_ON_SPHERE = 1.0 + 1e-9
 #: A shadow ray passes through at most this many transparent surfaces before it counts as blocked.
 MAX_SHADOW_CROSSINGS = 32
 
@@ -97,11 +100,18 @@ def sample_light(lit, j, p, u1, u2):
             return L, dist, 0.0
         return L, dist, cos_light * sc[LS_AREA] * _INV_PI / (dist * dist)
     # sphere light: uniform directions in the cone it subtends from p
-    to = sub(row3(vecs, LV_POSITION), p)
+    L, dist, solid_angle = sphere_cone(row3(vecs, LV_POSITION), sc[LS_RADIUS], p, u1, u2)
+    return L, dist, solid_angle * _INV_PI
+
+
+@njit_inline
+def sphere_cone(center, r, p, u1, u2):
+    """A uniform direction in the cone that the sphere (center, r) subtends from p: (L, dist to the sphere's near
+    surface along L, solid angle of the cone); the solid angle is 0 when p is inside the sphere."""
+    to = sub(center, p)
     dc = length(to)
-    r = sc[LS_RADIUS]
-    if dc <= r:
-        return (0.0, 0.0, 1.0), 0.0, 0.0  # inside the light
+    if dc * dc <= r * r * _ON_SPHERE:
+        return (0.0, 0.0, 1.0), 0.0, 0.0  # inside the light (or on it: a point of an emissive sphere itself)
     axis = mul(to, 1.0 / dc)
     sin2_max = (r * r) / (dc * dc)
     cos_max = math.sqrt(max(0.0, 1.0 - sin2_max))
@@ -114,8 +124,17 @@ def sample_light(lit, j, p, u1, u2):
     b = dot(to, L)
     disc = b * b - (dc * dc - r * r)
     dist = b - math.sqrt(max(0.0, disc))
-    solid_angle = 2.0 * math.pi * (1.0 - cos_max)
-    return L, dist, solid_angle * _INV_PI
+    return L, dist, 2.0 * math.pi * (1.0 - cos_max)
+
+
+@njit
+def sphere_cone_solid_angle(center, r, p):
+    """The solid angle of the cone the sphere (center, r) subtends from p (0 inside it): 2π(1 − cos θ_max)."""
+    to = sub(center, p)
+    dc2 = dot(to, to)
+    if dc2 <= r * r * _ON_SPHERE:
+        return 0.0
+    return 2.0 * math.pi * (1.0 - math.sqrt(max(0.0, 1.0 - r * r / dc2)))
 
 
 @njit

@@ -68,6 +68,13 @@ LS_ATT_Q = 2
 LS_RADIUS = 3
 LS_AREA = 4
 
+# Emitters of the path tracer (`Emitters`): every light and every emissive primitive, picked by power
+EMIT_LIGHT = 0  # a scene light (point, directional or area; its light_kind says which); emit_ref: light index
+EMIT_TRIANGLE = 1  # an emissive triangle, sampled uniformly by area; emit_ref: triangle index
+EMIT_SHAPE = 2  # an emissive analytic shape, sampled by area (see kernels.emitters); emit_ref: shape index
+EMIT_SPHERE = 3  # an emissive sphere of uniform scale, sampled in the cone it subtends; emit_ref: shape index
+EMIT_PARTS = 6  # columns of emit_parts: one probability per part (face) of a shape
+
 # Camera: cam_vecs float64 (4, 3) = position, u, v, w; cam_params float64 (CAM_SIZE,)
 CAM_ORTHO = 0  # 1.0 for orthographic
 CAM_TAN_HALF_FOV = 1
@@ -124,6 +131,23 @@ Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_i
 #: What the illumination model reads (illuminate, sample_light).
 Lighting = namedtuple(
     "Lighting", ["materials", "ambient", "light_kind", "light_samples", "light_vecs", "light_scalars"]
+)
+#: What the path tracer's light sampling reads besides `Lighting` (built by `compile.emitters`).
+Emitters = namedtuple(
+    "Emitters",
+    [
+        "emit_kind",  # int32 (ne,): EMIT_*
+        "emit_ref",  # int32 (ne,): light, triangle or shape index
+        "emit_cdf",  # float64 (ne,): cumulative selection probability (last entry 1)
+        "emit_pmf",  # float64 (ne,): selection probability, proportional to the emitter's power
+        "emit_area",  # float64 (ne,): world area (triangles, shapes)
+        "emit_parts",  # float64 (ne, EMIT_PARTS): shapes: probability of each part (face), indexed by part id
+        "emit_geom",  # float64 (ne, 4, 4): shapes: rows 0-2 world_from_canonical, [3, 0] |det| of its linear
+        # part; spheres: [3, :] = centre, radius
+        "tri_emit",  # int32 (nt,): entry of each triangle, -1 if it does not emit
+        "shape_emit",  # int32 (ns,): entry of each shape, -1 if it is not sampled
+        "light_emit",  # int32 (nl,): entry of each light
+    ],
 )
 #: What texture lookups read (kernels.texture).
 Textures = namedtuple("Textures", ["tex_info", "tex_pixels"])

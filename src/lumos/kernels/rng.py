@@ -34,3 +34,18 @@ def rand01(seed, pixel, sample, dim):
     h = mix64(h ^ np.uint64(sample))
     h = mix64(h ^ np.uint64(dim))
     return float(h >> _S11) * _INV_2_53
+
+
+@njit
+def sample_key(seed, pixel, sample):
+    """The hash of (seed, pixel, sample) that `rand01` starts from: `rand_key(sample_key(s, p, i), d)` equals
+    `rand01(s, p, i, d)`, at a quarter of the cost when one sample draws many dimensions (a path tracer)."""
+    h = mix64(np.uint64(seed))
+    h = mix64(h ^ np.uint64(pixel))
+    return mix64(h ^ np.uint64(sample))
+
+
+@njit
+def rand_key(key, dim):
+    """A uniform float64 in [0, 1) for dimension `dim` of the sample whose `sample_key` is `key`."""
+    return float(mix64(key ^ np.uint64(dim)) >> _S11) * _INV_2_53

@@ -30,3 +30,32 @@ def concentric_disk(u1, u2):
     else:
         r, phi = b, math.pi / 2.0 - (math.pi / 4.0) * (a / b)
     return r * math.cos(phi), r * math.sin(phi)
+
+
+@njit
+def erfinv(x):
+    """The inverse error function on (−1, 1), Giles' single-precision approximation ("Approximating the erfinv
+    function", GPU Computing Gems, 2010): relative error below 4e-7, enough to place a filter sample."""
+    w = -math.log(max((1.0 - x) * (1.0 + x), 1e-300))
+    if w < 5.0:
+        w -= 2.5
+        p = 2.81022636e-08
+        for c in (3.43273939e-07, -3.5233877e-06, -4.39150654e-06, 0.00021858087, -0.00125372503,
+                  -0.00417768164, 0.246640727, 1.50140941):
+            p = c + p * w
+    else:
+        w = math.sqrt(w) - 3.0
+        p = -0.000200214257
+        for c in (0.000100950558, 0.00134934322, -0.00367342844, 0.00573950773, -0.0076224613, 0.00943887047,
+                  1.00167406, 2.83297682):
+            p = c + p * w
+    return p * x
+
+
+@njit
+def truncated_gaussian(u, sigma, radius):
+    """An offset with the normal density of standard deviation sigma truncated to [−radius, radius], by inverting
+    its CDF at u ∈ [0, 1): a pixel filter sampled exactly (filter importance sampling), so every sample weighs 1."""
+    s = sigma * math.sqrt(2.0)
+    x = s * erfinv((2.0 * u - 1.0) * math.erf(radius / s))
+    return min(max(x, -radius), radius)

@@ -19,6 +19,7 @@ class Film:
     rays: int = 0
     threads: int = 1
     primary_rays: int = 0  # camera rays (methods that count them apart)
+    extra: dict = field(default_factory=dict)  # method-specific figures for the stats (path: spp taken, passes)
 
 
 def allocate_aovs(height: int, width: int):

@@ -392,7 +392,7 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
     cam_time = np.array(camera.shutter, dtype=np.float64)
     sa = compiled.arrays
     seed = np.int64(settings.seed)
-    max_depth = np.int64(settings.max_depth)
+    max_depth = np.int64(settings.resolved_max_depth())
     mode = _ANTIALIAS[settings.antialias]
     radiance = np.zeros((height, width, 3), np.float32)
     depth, normal, albedo, object_id = allocate_aovs(height, width)

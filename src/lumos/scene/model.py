@@ -80,7 +80,11 @@ class Camera(StrictModel):
 
 # ------------------------------------------------------------------------------------------ render settings
 
-AOV_NAMES = ("depth", "normal", "albedo", "object_id", "samples")
+AOV_NAMES = ("depth", "normal", "albedo", "object_id", "samples", "variance", "noisy")
+#: AOVs only the path tracer makes: the variance of each pixel's mean, and the image before denoising.
+PATH_AOVS = ("variance", "noisy")
+#: `max_depth` of each method when the scene and the flags leave it unset (None: unbounded, roulette ends paths).
+DEFAULT_MAX_DEPTH = {"whitted": 5, "path": None}
 
 
 class RenderSettings(StrictModel):
@@ -90,12 +94,14 @@ class RenderSettings(StrictModel):
     width: Annotated[int, Field(ge=1, le=65536)] = 640
     height: Annotated[int, Field(ge=1, le=65536)] = 480
     spp: Annotated[int, Field(ge=1, le=1 << 20)] = 1
-    max_depth: Annotated[int, Field(ge=0, le=256)] = 5
+    #: bounces after the first hit; None (unset) is the method's default: 5 for whitted, unbounded for path
+    max_depth: Optional[Annotated[int, Field(ge=0, le=1024)]] = None
     seed: Annotated[int, Field(ge=0, lt=1 << 32)] = 0
     shading: Literal["flat", "gouraud", "phong"] = "phong"
     exposure: Positive = 1.0
     threads: Optional[Annotated[int, Field(ge=1, le=1024)]] = None
-    aov: list[Literal["depth", "normal", "albedo", "object_id", "samples"]] = Field(default_factory=list)
+    aov: list[Literal["depth", "normal", "albedo", "object_id", "samples", "variance", "noisy"]] = Field(
+        default_factory=list)
     # anti-aliasing of the ray methods: `spp` jittered samples (supersample) or the classic adaptive method
     antialias: Literal["none", "supersample", "adaptive"] = "supersample"
     adaptive_threshold: Positive = 0.03
@@ -105,6 +111,21 @@ class RenderSettings(StrictModel):
     cull_backfaces: bool = False
     shadows: bool = False
     tessellation: Annotated[int, Field(ge=3, le=4096)] = 48
+    # path tracing (method: path)
+    #: pixel filter: box (each sample counts for its own pixel) or a Gaussian of standard deviation 0.5 pixel
+    filter: Literal["box", "gaussian"] = "box"
+    #: how direct light is found: multiple importance sampling, or light (emitter) sampling or BSDF sampling alone
+    sampling: Literal["mis", "light", "bsdf"] = "mis"
+    #: stop after the pass that crosses this many seconds of rendering (the image holds the samples taken so far)
+    time_limit: Optional[Positive] = None
+    #: run Intel Open Image Denoise on the final image (needs the optional `pyoidn`)
+    denoise: bool = False
+
+    def resolved_max_depth(self) -> Optional[int]:
+        """`max_depth`, or the method's default when it is unset (None: unbounded)."""
+        if self.max_depth is not None:
+            return self.max_depth
+        return DEFAULT_MAX_DEPTH.get(self.method, 5)
 
     @model_validator(mode="after")
     def _check_size(self):

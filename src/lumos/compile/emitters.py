@@ -1,0 +1,192 @@
+"""What the path tracer adds to a compiled scene: the materials read physically, and the table of emitters.
+
+    rows = physical_materials(names, material_rows)   # kd + ks + kr + kt <= 1 per channel (a warning otherwise)
+    em = build_emitters(arrays, bounds)               # kernels.layout.Emitters
+
+The table has one entry per scene light and one per emissive primitive (a triangle of an emissive mesh, an
+emissive sphere, box, cylinder, cone or disk). Next-event estimation picks an entry with probability
+proportional to its power (a CDF, searched by bisection in `kernels.emitters.pick_emitter`), then a point on
+it. Emissive planes (unbounded) and csg objects are not in the table: their light is found by BSDF sampling
+alone (with full weight), which is unbiased but noisier.
+
+Power, in the units of DESIGN.md §3 (a point light of intensity I delivers irradiance π·I·cosθ/att(d)), with
+the mean of the RGB channels:
+    area light, emissive primitive   π·Le·A (A its world area)
+    point light                      4π·r²·π·I/att(r) at r = half the radius of the scene's bounds
+    directional light                π·I·π·R² (R the radius of the scene's bounds)
+The last two are estimates (a delta light's power depends on the scene); any positive weights give the same
+image in expectation, these only make the noise smaller where lights of different kinds meet.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from ..errors import LumosWarning
+from ..kernels import layout as L
+
+#: Canonical area of each part of a canonical shape (layout.SHAPE_*): the part ids of `kernels.intersect`.
+_PART_AREAS = {
+    L.SHAPE_SPHERE: (4.0 * np.pi,),
+    L.SHAPE_BOX: (1.0,) * 6,
+    L.SHAPE_CYLINDER: (2.0 * np.pi, np.pi, np.pi),
+    L.SHAPE_CONE: (np.pi * np.sqrt(2.0), np.pi),
+    L.SHAPE_DISK: (np.pi,),
+}
+
+
+def physical_materials(names: list[str], rows: np.ndarray) -> np.ndarray:
+    """The material rows with kd + ks + kr + kt scaled down to at most 1 in every channel (more would reflect
+    more light than arrives: energy from nothing), warning once per material, named by `names[row]`."""
+    rows = rows.copy()
+    for i, row in enumerate(rows):
+        total = sum(row[c : c + 3] for c in (L.MAT_KD, L.MAT_KS, L.MAT_KR, L.MAT_KT))
+        worst = float(np.max(total))
+        if worst > 1.0 + 1e-9:
+            channel = "rgb"[int(np.argmax(total))]
+            scale = 1.0 / worst
+            warnings.warn(f"material {names[i]}: kd + ks + kr + kt = {worst:.3g} in {channel} would create energy; "
+                          f"the path tracer scales its coefficients by {scale:.3g}", LumosWarning, stacklevel=2)
+            for c in (L.MAT_KD, L.MAT_KS, L.MAT_KR, L.MAT_KT):
+                rows[i, c : c + 3] *= scale
+    return rows
+
+
+def _mean(rgb) -> float:
+    return float(np.mean(rgb))
+
+
+def _shape_parts(kind: int, capped: bool, world_from_canonical: np.ndarray) -> np.ndarray:
+    """World area of each part of a canonical shape under the affine map, estimated from the Jacobian
+    |det M|·|M^-T n| of the area element at points spread over the part (exact for flat parts)."""
+    m = world_from_canonical[:3, :3]
+    inv_t = np.linalg.inv(m).T
+    det = abs(np.linalg.det(m))
+    areas = np.zeros(L.EMIT_PARTS)
+    phi = (np.arange(64) + 0.5) * (2.0 * np.pi / 64)
+    for part, area in enumerate(_PART_AREAS[kind]):
+        if kind in (L.SHAPE_CYLINDER, L.SHAPE_CONE) and part > 0 and not capped:
+            continue
+        if kind == L.SHAPE_SPHERE:  # normals spread over the sphere (a Fibonacci lattice)
+            z = 1.0 - (np.arange(256) + 0.5) / 128.0
+            a = np.arange(256) * np.pi * (3.0 - np.sqrt(5.0))
+            r = np.sqrt(1.0 - z * z)
+            normals = np.stack([r * np.cos(a), r * np.sin(a), z], axis=1)
+        elif kind == L.SHAPE_BOX:
+            normals = np.zeros((1, 3))
+            normals[0, part // 2] = 1.0
+        elif part == 0 and kind == L.SHAPE_CYLINDER:  # the side: unit normals (cos φ, sin φ, 0)
+            normals = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=1)
+        elif part == 0:  # the cone's side: unit normals (cos φ, sin φ, 1)/√2
+            normals = np.stack([np.cos(phi), np.sin(phi), np.ones_like(phi)], axis=1) / np.sqrt(2.0)
+        else:  # caps and disks
+            normals = np.array([[0.0, 0.0, 1.0]])
+        jac = det * np.linalg.norm(normals @ inv_t.T, axis=1)
+        areas[part] = area * float(jac.mean())
+    return areas
+
+
+def _uniform_scale(m: np.ndarray) -> bool:
+    """True when the linear part of m is a rotation times one scale (a sphere stays a sphere)."""
+    a = m[:3, :3]
+    g = a.T @ a
+    s = g[0, 0]
+    return bool(np.allclose(g, s * np.eye(3), rtol=1e-9, atol=1e-12 * max(s, 1e-300)))
+
+
+def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
+    """The emitter table of a compiled scene (see the module doc)."""
+    mats = arrays.materials
+    lk, lv, ls = arrays.light_kind, arrays.light_vecs, arrays.light_scalars
+    radius = 0.5 * float(np.linalg.norm(bounds[1] - bounds[0])) if len(bounds) else 1.0
+    radius = max(radius, 1e-6)
+    kinds, refs, powers, areas, parts, geoms = [], [], [], [], [], []
+
+    def add(kind, ref, power, area=0.0, part=None, geom=None):
+        kinds.append(kind)
+        refs.append(ref)
+        powers.append(max(power, 0.0))
+        areas.append(area)
+        parts.append(np.zeros(L.EMIT_PARTS) if part is None else part)
+        geoms.append(np.zeros((4, 4)) if geom is None else geom)
+
+    light_emit = np.full(len(lk), -1, np.int32)
+    for j in range(len(lk)):
+        light_emit[j] = len(kinds)
+        intensity = _mean(lv[j, L.LV_DIFFUSE] + lv[j, L.LV_SPECULAR]) / 2.0
+        if lk[j] == L.LIGHT_POINT:
+            r = 0.5 * radius
+            att = ls[j, L.LS_ATT_C] + ls[j, L.LS_ATT_L] * r + ls[j, L.LS_ATT_Q] * r * r
+            add(L.EMIT_LIGHT, j, 4.0 * np.pi * r * r * np.pi * intensity / att)
+        elif lk[j] == L.LIGHT_DIRECTIONAL:
+            add(L.EMIT_LIGHT, j, np.pi * intensity * np.pi * radius * radius)
+        else:
+            add(L.EMIT_LIGHT, j, np.pi * _mean(lv[j, L.LV_DIFFUSE]) * ls[j, L.LS_AREA])
+
+    # emissive triangles (not those of csg mesh solids: they are tested inside their csg object)
+    tri_emit = np.full(len(arrays.tri_info), -1, np.int32)
+    tri_in_bvh = np.unique(arrays.prim_ref[arrays.prim_ref >= 0])
+    for t in tri_in_bvh:
+        info = arrays.tri_info[t]
+        le = mats[info[L.INFO_MATERIAL], L.MAT_EMISSION : L.MAT_EMISSION + 3]
+        if info[L.INFO_LIGHT] >= 0 or not np.any(le > 0):
+            continue
+        v = arrays.tri_verts[t].astype(np.float64).reshape(3, 3)
+        area = 0.5 * float(np.linalg.norm(np.cross(v[1] - v[0], v[2] - v[0])))
+        if area <= 0.0:
+            continue
+        tri_emit[t] = len(kinds)
+        add(L.EMIT_TRIANGLE, int(t), np.pi * _mean(le) * area, area)
+
+    # emissive shapes in the BVH (planes are unbounded, csg objects are sampled by BSDF rays only)
+    shape_emit = np.full(len(arrays.shape_info), -1, np.int32)
+    top_shapes = np.unique(~arrays.prim_ref[arrays.prim_ref < 0])
+    for s in top_shapes:
+        info = arrays.shape_info[s]
+        kind = int(info[L.INFO_KIND])
+        le = mats[info[L.INFO_MATERIAL], L.MAT_EMISSION : L.MAT_EMISSION + 3]
+        if info[L.INFO_LIGHT] >= 0 or kind not in _PART_AREAS or not np.any(le > 0):
+            continue
+        object_from_world = np.eye(4)
+        object_from_world[:3, :4] = arrays.shape_xform[s, :3, :4]
+        world = np.linalg.inv(object_from_world)
+        geom = np.zeros((4, 4))
+        if kind == L.SHAPE_SPHERE and _uniform_scale(world):
+            r = float(np.linalg.norm(world[:3, 0]))
+            geom[3] = (*world[:3, 3], r)
+            shape_emit[s] = len(kinds)
+            add(L.EMIT_SPHERE, int(s), np.pi * _mean(le) * 4.0 * np.pi * r * r, 4.0 * np.pi * r * r, geom=geom)
+            continue
+        part_areas = _shape_parts(kind, bool(info[L.INFO_FLAGS] & L.FLAG_CAPPED), world)
+        area = float(part_areas.sum())
+        if area <= 0.0:
+            continue
+        geom[:3, :4] = world[:3, :4]
+        geom[3, 0] = abs(np.linalg.det(world[:3, :3]))
+        shape_emit[s] = len(kinds)
+        add(L.EMIT_SHAPE, int(s), np.pi * _mean(le) * area, area, part_areas / area, geom)
+
+    power = np.asarray(powers, np.float64)
+    total = power.sum()
+    if len(power) and not total > 0.0:  # lights of zero power: none is worth a sample
+        power = np.zeros_like(power)
+    pmf = power / total if total > 0.0 else power
+    cdf = np.cumsum(pmf)
+    if len(cdf) and total > 0.0:
+        cdf[-1] = 1.0
+        cdf[pmf > 0] = np.minimum(cdf[pmf > 0], 1.0)
+    n = len(kinds)
+    return L.Emitters(
+        emit_kind=np.asarray(kinds, np.int32).reshape(n),
+        emit_ref=np.asarray(refs, np.int32).reshape(n),
+        emit_cdf=np.ascontiguousarray(cdf, np.float64).reshape(n),
+        emit_pmf=np.ascontiguousarray(pmf, np.float64).reshape(n),
+        emit_area=np.asarray(areas, np.float64).reshape(n),
+        emit_parts=np.asarray(parts, np.float64).reshape(n, L.EMIT_PARTS),
+        emit_geom=np.asarray(geoms, np.float64).reshape(n, 4, 4),
+        tri_emit=tri_emit,
+        shape_emit=shape_emit,
+        light_emit=light_emit,
+    )

@@ -1,0 +1,168 @@
+"""The materials read physically, for the path tracer (DESIGN.md §4): one BSDF from the classic coefficients.
+
+    f(wo, wi) = kd/π                                   Lambertian albedo kd
+              + ks·(n+2)/(2π)·cosⁿα                    normalised modified Phong lobe, α the angle between wi and
+                                                       the mirror direction of wo (Lafortune & Willems 1994)
+              + kr·δ(wi = mirror of wo)                 perfect mirror
+              + kt·(smooth dielectric of index ior)     Fresnel-weighted reflection and refraction
+
+The first two are the smooth part (`eval_smooth`); the last two are delta lobes, reached only by sampling.
+`sample_*` functions return the sampled direction with its pdf (solid angle), so each sampler can be checked
+against its pdf by a χ² test. A lobe is chosen with probability `lobe_probs` (proportional to the mean of its
+coefficient), and the smooth part's pdf is the mixture p_d·pdf_cosine + p_s·pdf_phong (one-sample MIS over the
+lobes, the balance heuristic), which is also the pdf the light-sampling MIS weights use.
+
+All vectors are unit tuples; `n` is the shading normal on the side of wo (wo·n >= 0).
+"""
+
+import math
+
+from .jit import njit, njit_inline
+from .vec import dot, madd, mul, orthonormal_basis
+
+_INV_PI = 1.0 / math.pi
+_INV_2PI = 0.5 / math.pi
+_TWO_PI = 2.0 * math.pi
+
+
+@njit_inline
+def lobe_probs(kd, ks, kr, kt):
+    """Probabilities (p_d, p_s, p_r, p_t) of sampling the diffuse, Phong, mirror and dielectric lobes: each
+    proportional to the mean of its RGB coefficient; all 0 for a black material."""
+    wd = (kd[0] + kd[1] + kd[2]) / 3.0
+    ws = (ks[0] + ks[1] + ks[2]) / 3.0
+    wr = (kr[0] + kr[1] + kr[2]) / 3.0
+    wt = (kt[0] + kt[1] + kt[2]) / 3.0
+    total = wd + ws + wr + wt
+    if not total > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    inv = 1.0 / total
+    return wd * inv, ws * inv, wr * inv, wt * inv
+
+
+@njit_inline
+def conserve_energy(kd, ks, kr, kt):
+    """The coefficients scaled down by one factor so that kd + ks + kr + kt <= 1 in every channel (a textured
+    colour may push a material over; the compile step already scaled the untextured rows, with a warning)."""
+    m = max(kd[0] + ks[0] + kr[0] + kt[0], kd[1] + ks[1] + kr[1] + kt[1], kd[2] + ks[2] + kr[2] + kt[2])
+    if m <= 1.0:
+        return kd, ks, kr, kt
+    s = 1.0 / m
+    return mul(kd, s), mul(ks, s), mul(kr, s), mul(kt, s)
+
+
+@njit
+def mirror(wo, n):
+    """wo reflected about n: 2(n·wo)n − wo."""
+    return madd(mul(wo, -1.0), n, 2.0 * dot(n, wo))
+
+
+@njit_inline
+def eval_smooth(kd, ks, exponent, p_d, p_s, n, wo, wi):
+    """The smooth part of the BSDF for the pair (wo, wi): (f_diffuse rgb, f_phong rgb, pdf of wi).
+
+    f_diffuse = kd/π and f_phong = ks·(n+2)/(2π)·cosⁿα, both 0 where wi is below the surface (n·wi <= 0); pdf is
+    the mixture p_d·cosθ/π + p_s·(n+1)/(2π)·cosⁿα with which `sample_cosine` and `sample_phong` draw wi."""
+    cos_i = dot(n, wi)
+    if cos_i <= 0.0:
+        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0
+    pdf = p_d * cos_i * _INV_PI
+    fd = (kd[0] * _INV_PI, kd[1] * _INV_PI, kd[2] * _INV_PI)
+    fs = (0.0, 0.0, 0.0)
+    if p_s > 0.0:
+        cos_a = dot(mirror(wo, n), wi)
+        if cos_a > 0.0:
+            lobe = cos_a**exponent
+            c = (exponent + 2.0) * _INV_2PI * lobe
+            fs = (ks[0] * c, ks[1] * c, ks[2] * c)
+            pdf += p_s * (exponent + 1.0) * _INV_2PI * lobe
+    return fd, fs, pdf
+
+
+@njit
+def sample_cosine(n, u1, u2):
+    """A cosine-weighted direction about unit n (Malley's method: a uniform disk point lifted to the
+    hemisphere); its pdf is cosθ/π."""
+    r = math.sqrt(u1)
+    phi = _TWO_PI * u2
+    x = r * math.cos(phi)
+    y = r * math.sin(phi)
+    z = math.sqrt(max(0.0, 1.0 - u1))
+    t, b = orthonormal_basis(n)
+    return (x * t[0] + y * b[0] + z * n[0], x * t[1] + y * b[1] + z * n[1], x * t[2] + y * b[2] + z * n[2])
+
+
+@njit
+def sample_phong(axis, exponent, u1, u2):
+    """A direction about unit `axis` with density (n+1)/(2π)·cosⁿα (α from the axis): cos α = u1^(1/(n+1))."""
+    cos_a = u1 ** (1.0 / (exponent + 1.0))
+    sin_a = math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
+    phi = _TWO_PI * u2
+    x = sin_a * math.cos(phi)
+    y = sin_a * math.sin(phi)
+    t, b = orthonormal_basis(axis)
+    return (x * t[0] + y * b[0] + cos_a * axis[0], x * t[1] + y * b[1] + cos_a * axis[1],
+            x * t[2] + y * b[2] + cos_a * axis[2])
+
+
+@njit_inline
+def sample_smooth(kd, ks, exponent, p_d, p_s, n, wo, u_lobe, u1, u2):
+    """A direction from the smooth part of the BSDF: the diffuse lobe when u_lobe < p_d, else the Phong lobe
+    about the mirror direction (u_lobe < p_d + p_s), with the mixture pdf of `eval_smooth`. Returns (wi, f·cos/pdf
+    as rgb, pdf); pdf = 0 when the direction falls below the surface (the Phong lobe reaches past it)."""
+    if u_lobe < p_d:
+        wi = sample_cosine(n, u1, u2)
+    else:
+        wi = sample_phong(mirror(wo, n), exponent, u1, u2)
+    fd, fs, pdf = eval_smooth(kd, ks, exponent, p_d, p_s, n, wo, wi)
+    if not pdf > 0.0:
+        return wi, (0.0, 0.0, 0.0), 0.0
+    k = dot(n, wi) / pdf
+    return wi, ((fd[0] + fs[0]) * k, (fd[1] + fs[1]) * k, (fd[2] + fs[2]) * k), pdf
+
+
+@njit
+def fresnel_dielectric(cos_i, eta):
+    """Unpolarised Fresnel reflectance of a smooth dielectric interface and the cosine of the refracted ray:
+    (F, cos_t), with eta = n_incident / n_transmitted and cos_i >= 0 on the incident side (Born & Wolf; F = 1
+    and cos_t = 0 under total internal reflection)."""
+    sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i)
+    if sin2_t >= 1.0:
+        return 1.0, 0.0
+    cos_t = math.sqrt(1.0 - sin2_t)
+    rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    return 0.5 * (rs * rs + rp * rp), cos_t
+
+
+@njit
+def refracted(wo, n, eta, cos_i, cos_t):
+    """The refracted direction of the ray arriving along −wo (Snell's law, eta = n_i/n_t): −eta·wo +
+    (eta·cos_i − cos_t)·n, unit."""
+    k = eta * cos_i - cos_t
+    t = (-eta * wo[0] + k * n[0], -eta * wo[1] + k * n[1], -eta * wo[2] + k * n[2])
+    inv = 1.0 / math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    return (t[0] * inv, t[1] * inv, t[2] * inv)
+
+
+@njit
+def sample_dielectric(wo, n, eta, u):
+    """The smooth dielectric's choice for the ray arriving along −wo at unit normal n (wo's side), eta =
+    n_incident/n_transmitted: reflection with probability F (Fresnel), else refraction. Returns (wi, refracted,
+    F); every choice carries the weight kt (F/F, (1−F)/(1−F)), and a refracted one also (n1/n2)² = eta²
+    (radiance is compressed into the denser medium: Veach 1997, §5.2)."""
+    cos_o = max(dot(wo, n), 0.0)
+    F, cos_t = fresnel_dielectric(cos_o, eta)
+    if u < F:
+        return mirror(wo, n), False, F
+    return refracted(wo, n, eta, cos_o, cos_t), True, F
+
+
+@njit
+def power_heuristic(pdf_a, pdf_b):
+    """Veach's power heuristic (β = 2) weight of the strategy with pdf_a against the one with pdf_b."""
+    a = pdf_a * pdf_a
+    b = pdf_b * pdf_b
+    if not a + b > 0.0:
+        return 0.0
+    return a / (a + b)

@@ -1,0 +1,457 @@
+"""Path tracing: the rendering equation solved by random paths from the eye (Kajiya 1986), the global
+illumination of the chapter's section 3.3 — light reflected from other surfaces to the current one.
+
+    L(x → eye) = Le(x) + ∫ f(wo, wi) L(wi) cos θ dω                           (the rendering equation)
+
+Each sample follows one path: at every vertex it adds the light reached directly by two strategies, combined by
+multiple importance sampling with the power heuristic (Veach & Guibas 1995):
+- next-event estimation: an emitter picked in proportion to its power (`kernels.emitters`), a point on it, and a
+  shadow ray; delta lights (point, directional) are only reached this way;
+- BSDF sampling: the direction the path continues in, whose hit adds the emission it finds.
+The path continues with the BSDF sample; after `RR_DEPTH` bounces Russian roulette ends it with probability
+1 − q, q = min(max throughput × η², 0.95), and reweights the survivors by 1/q (unbiased). `max_depth` D counts
+bounces after the first hit, as whitted does: emission is gathered at vertices 0 … D+1 and light sampled at
+0 … D (D = 0: direct light only; Mitsuba's and pbrt's max_depth is D + 2); unset, paths are unbounded.
+
+Materials are read physically (`kernels.bsdf`): kd Lambertian, ks/shininess a normalised Phong lobe, kr a mirror,
+kt/ior a smooth dielectric with exact Fresnel (nested media as in whitted; a transparent surface that is not a
+solid is a thin sheet that lets kt through unbent). ka and the scene's ambient are ignored. Shadow rays stop at
+every surface: light through glass (caustics) is found by BSDF sampling alone.
+
+The image is refined pass by pass; each pass adds samples [s0, s1) to every pixel. Every random number is a
+function of (seed, pixel, sample, dimension), and each pixel sums its samples in order into float64 buffers, so
+the image is the same for any thread count and any split of the samples into passes.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import threading
+import time as _time
+
+import numpy as np
+
+from .. import config
+from ..compile.camera import camera_arrays
+from ..kernels.bsdf import (
+    conserve_energy,
+    eval_smooth,
+    lobe_probs,
+    mirror,
+    power_heuristic,
+    sample_dielectric,
+    sample_smooth,
+)
+from ..kernels.camera import camera_ray_at
+from ..kernels.emitters import emitter_pdf, sample_emitter
+from ..kernels.illumination import is_solid
+from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
+from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_IOR, MAT_KT, MAT_SHININESS
+from ..kernels.rng import rand_key, sample_key
+from ..kernels.sampling import truncated_gaussian
+from ..kernels.surface import offset_origin, shading_side, surface_at
+from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
+from ..kernels.traverse import any_hit, closest_hit
+from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
+from .common import Film, check_memory, row_bands, set_threads
+
+#: Bounces before Russian roulette may end a path (Mitsuba's default rr_depth).
+RR_DEPTH = 5
+#: No path is longer than this, whatever max_depth says (roulette ends paths long before).
+MAX_BOUNCES = 1024
+#: Nesting depth of the media a path can be inside (as whitted).
+MAX_MEDIA = 4
+#: Random dimensions: 0–1 position in the pixel, 2–3 lens, 4 shutter time; vertex k uses DIM_PATH + k·DIM_VERTEX
+#: + (0 lobe, 1–2 direction, 3 emitter, 4–5 point on it, 6 roulette).
+DIM_TIME = 4
+DIM_PATH = 8
+DIM_VERTEX = 8
+MODE_MIS, MODE_LIGHT, MODE_BSDF = 0, 1, 2
+_MODES = {"mis": MODE_MIS, "light": MODE_LIGHT, "bsdf": MODE_BSDF}
+FILTER_BOX, FILTER_GAUSSIAN, FILTER_CENTRE = 0, 1, 2
+#: The Gaussian pixel filter: standard deviation and radius in pixels (Mitsuba's `gaussian`).
+GAUSSIAN_SIGMA = 0.5
+GAUSSIAN_RADIUS = 2.0
+#: Seconds a pass should take once the first pass has shown the speed (progress, --time-limit, Ctrl-C).
+PASS_SECONDS = 1.0
+
+
+@njit_alloc
+def _scratch():
+    """Per-thread work arrays: the BVH stack and the media the path is inside (object, index of refraction)."""
+    return (np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK), np.empty(MAX_MEDIA, np.int64),
+            np.empty(MAX_MEDIA))
+
+
+@njit_inline
+def _emitter_entry(em, ref, light):
+    """The emitter-table entry of the surface hit (area light, emissive triangle or shape), -1 if none."""
+    if light >= 0:
+        return em.light_emit[light]
+    if ref >= 0:
+        return em.tri_emit[ref]
+    return em.shape_emit[~ref]
+
+
+@njit_inline
+def _shadow_ray(p, n_geo, wi, dist):
+    """The shadow ray towards the light point p + dist·wi: from the origin offset off the surface, aimed at that
+    point itself and stopping just short of it (the emitter is a surface too, and a ray aimed along wi from the
+    offset origin would meet a grazing light before the point). Directional lights keep wi."""
+    origin = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
+    if dist >= config.T_FAR:
+        return origin, wi, dist
+    to = (p[0] + dist * wi[0] - origin[0], p[1] + dist * wi[1] - origin[1], p[2] + dist * wi[2] - origin[2])
+    t = math.sqrt(to[0] * to[0] + to[1] * to[1] + to[2] * to[2])
+    if not t > 0.0:
+        return origin, wi, 0.0
+    inv = 1.0 / t
+    return origin, (to[0] * inv, to[1] * inv, to[2] * inv), t * (1.0 - config.RAY_EPSILON)
+
+
+@njit_inline
+def _media_across(media_obj, media_ior, n_media, obj, ior, entering):
+    """Indices of refraction (n1, n2) on the incident and transmitted sides of solid `obj`'s surface."""
+    n1 = media_ior[n_media - 1] if n_media > 0 else 1.0
+    if entering:
+        return n1, ior
+    n2 = 1.0
+    found = False
+    for k in range(n_media - 1, -1, -1):  # the innermost medium once obj is left
+        if media_obj[k] == obj and not found:
+            found = True
+            continue
+        n2 = media_ior[k]
+        break
+    return n1, n2
+
+
+@njit_inline
+def _media_update(media_obj, media_ior, n_media, obj, ior, entering):
+    """The media after a refraction through solid obj: pushed on entering, removed on leaving."""
+    if entering:
+        if n_media < MAX_MEDIA:
+            media_obj[n_media] = obj
+            media_ior[n_media] = ior
+            return n_media + 1
+        return n_media
+    for k in range(n_media - 1, -1, -1):
+        if media_obj[k] == obj:
+            for j in range(k, n_media - 1):
+                media_obj[j] = media_obj[j + 1]
+                media_ior[j] = media_ior[j + 1]
+            return n_media - 1
+    return n_media
+
+
+@njit_inline
+def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, key, scratch, background):
+    """Radiance along the camera ray (o, d) at shutter time `time`: one path, in the order of the maths.
+
+    Returns (rgb, rays traced, t and object id of the first hit (t = −1 on a miss), albedo and shading normal of
+    the first hit (the denoiser's guides))."""
+    stack, stack_t, media_obj, media_ior = scratch
+    L0 = L1 = L2 = 0.0
+    b0 = b1 = b2 = 1.0  # throughput
+    eta_scale = 1.0  # 1/η² of the refractions so far: roulette looks at the throughput without them
+    rays = 0
+    n_media = 0
+    prev_delta = True  # the camera ray, and rays from mirrors and glass, see emitters with full weight
+    prev_pdf = 0.0
+    prev_p = o
+    first_t = -1.0
+    first_obj = -1
+    albedo = (0.0, 0.0, 0.0)
+    normal = (0.0, 0.0, 0.0)
+    depth = 0
+    while True:
+        # stage 1: the nearest surface along the ray
+        hit = closest_hit(geo, o, d, 0.0, config.T_FAR, stack, stack_t, time)
+        rays += 1
+        t = hit[0]
+        if t < 0.0:
+            L0 += b0 * background[0]
+            L1 += b1 * background[1]
+            L2 += b2 * background[2]
+            break
+        ref = hit[1]
+        p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, o, d, t, ref, hit[2], hit[3], hit[4], time)
+        mat = lit.materials[mat_id]
+        wo = (-d[0], -d[1], -d[2])
+        entering = n_geo[0] * d[0] + n_geo[1] * d[1] + n_geo[2] * d[2] < 0.0
+        # stage 2: emission found by the BSDF-sampled ray, weighted against light sampling
+        le0, le1, le2 = mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2]
+        if (le0 > 0.0 or le1 > 0.0 or le2 > 0.0) and (light < 0 or lit.light_kind[light] == LIGHT_SPHERE
+                                                      or entering):
+            w = 1.0
+            if not prev_delta and mode != MODE_BSDF:
+                e = _emitter_entry(em, ref, light)
+                if e >= 0:  # an emitter light sampling could also have found (pdf 0: it could not, from there)
+                    pdf_light = emitter_pdf(em, lit, surf, e, prev_p, d, t, n_geo, ref, hit[4], time)
+                    if pdf_light > 0.0:
+                        w = 0.0 if mode == MODE_LIGHT else power_heuristic(prev_pdf, pdf_light)
+            L0 += b0 * le0 * w
+            L1 += b1 * le1 * w
+            L2 += b2 * le2 * w
+        if depth == 0:
+            first_t, first_obj = t, obj
+        if max_depth >= 0 and depth > max_depth:
+            break
+        # stage 3: the surface: bump map, normals on the viewer's side, the material's lobes
+        if mat[MAT_BUMP] >= 0.0:
+            dpdu, dpdv = surface_tangents(surf, ref, hit[4], p, n_sh, time)
+            n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
+        n_s = shading_side(n_sh, n_geo, wo)
+        n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
+        ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)
+        kd, ks, kr, kt = conserve_energy(kd, ks, kr, (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2]))
+        p_d, p_s, p_r, p_t = lobe_probs(kd, ks, kr, kt)
+        if depth == 0:
+            albedo = (min(kd[0] + ks[0] + kr[0] + kt[0], 1.0), min(kd[1] + ks[1] + kr[1] + kt[1], 1.0),
+                      min(kd[2] + ks[2] + kr[2] + kt[2], 1.0))
+            normal = n_s
+        if p_d + p_s + p_r + p_t == 0.0:
+            break  # black: nothing leaves
+        exponent = mat[MAT_SHININESS]
+        dim = DIM_PATH + depth * DIM_VERTEX
+        # stage 4: next-event estimation (the smooth lobes only: a mirror or glass cannot meet a light sample)
+        if p_d + p_s > 0.0:
+            wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, rand_key(key, dim + 3),
+                                                                  rand_key(key, dim + 4), rand_key(key, dim + 5),
+                                                                  time)
+            if pdf_light > 0.0 and (delta or mode != MODE_BSDF):
+                cos_i = n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]
+                if cos_i > 0.0 and n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] > 0.0:
+                    fd, fs, pdf_bsdf = eval_smooth(kd, ks, exponent, p_d, p_s, n_s, wo, wi)
+                    c0 = (fd[0] * led[0] + fs[0] * les[0]) * cos_i
+                    c1 = (fd[1] * led[1] + fs[1] * les[1]) * cos_i
+                    c2 = (fd[2] * led[2] + fs[2] * les[2]) * cos_i
+                    if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
+                        origin, ws, t_light = _shadow_ray(p, n_geo, wi, dist)
+                        rays += 1
+                        if not any_hit(geo, origin, ws, 0.0, t_light, stack, time):
+                            w = 1.0 if (delta or mode == MODE_LIGHT) else power_heuristic(pdf_light, pdf_bsdf)
+                            w /= pdf_light
+                            L0 += b0 * c0 * w
+                            L1 += b1 * c1 * w
+                            L2 += b2 * c2 * w
+        # stage 5: BSDF sampling: the direction the path goes on in, and its weight f·cos/pdf
+        u_lobe = rand_key(key, dim)
+        u1 = rand_key(key, dim + 1)
+        u2 = rand_key(key, dim + 2)
+        p_smooth = p_d + p_s
+        if u_lobe < p_smooth:
+            wi, (w0, w1, w2), pdf = sample_smooth(kd, ks, exponent, p_d, p_s, n_s, wo, u_lobe, u1, u2)
+            if not pdf > 0.0 or n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] <= 0.0:
+                break
+            prev_delta = False
+            prev_pdf = pdf
+        elif u_lobe < p_smooth + p_r:
+            wi = mirror(wo, n_s)
+            if n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] <= 0.0:
+                break
+            w0, w1, w2 = kr[0] / p_r, kr[1] / p_r, kr[2] / p_r
+            prev_delta = True
+        else:
+            u_t = (u_lobe - p_smooth - p_r) / p_t  # uniform in [0, 1) again: reflect or refract
+            w0, w1, w2 = kt[0] / p_t, kt[1] / p_t, kt[2] / p_t
+            prev_delta = True
+            if is_solid(surf, ref):
+                n1, n2 = _media_across(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
+                eta = n1 / n2
+                wi, through, F = sample_dielectric(wo, n_s, eta, u_t)
+                if through:
+                    w0, w1, w2 = w0 * eta * eta, w1 * eta * eta, w2 * eta * eta  # radiance scales by (n1/n2)²
+                    eta_scale /= eta * eta
+                    n_media = _media_update(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
+            else:
+                wi = d  # a thin transparent sheet: straight through
+        b0 *= w0
+        b1 *= w1
+        b2 *= w2
+        if not (b0 > 0.0 or b1 > 0.0 or b2 > 0.0):
+            break
+        # stage 6: Russian roulette
+        if depth + 1 >= RR_DEPTH:
+            q = min(max(b0, b1, b2) * eta_scale, 0.95)
+            if rand_key(key, dim + 6) >= q:
+                break
+            b0 /= q
+            b1 /= q
+            b2 /= q
+        depth += 1
+        if depth >= MAX_BOUNCES:
+            break
+        prev_p = p
+        o = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
+        d = wi
+    return (L0, L1, L2), rays, first_t, first_obj, albedo, normal
+
+
+@njit
+def _pixel_point(filter_kind, key, x, y):
+    """The image point of a sample of pixel (x, y): uniform in the pixel (box), drawn from the Gaussian
+    filter around its centre, or the centre itself."""
+    if filter_kind == FILTER_CENTRE:
+        return x + 0.5, y + 0.5
+    u1 = rand_key(key, 0)
+    u2 = rand_key(key, 1)
+    if filter_kind == FILTER_BOX:
+        return x + u1, y + u2
+    return (x + 0.5 + truncated_gaussian(u1, GAUSSIAN_SIGMA, GAUSSIAN_RADIUS),
+            y + 0.5 + truncated_gaussian(u2, GAUSSIAN_SIGMA, GAUSSIAN_RADIUS))
+
+
+@njit_parallel
+def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, seed, max_depth, mode,
+               filter_kind, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row):
+    """Samples s0 … s1−1 of every pixel of rows y0 … y1−1, added (in sample order) to the float64 buffers:
+    sums and sums2 (H, W, 3) of radiance and its square, guides (H, W, 6) of albedo and normal; depth and
+    object_id from sample 0."""
+    for y in prange(y0, y1):
+        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+        scratch = _scratch()
+        rays = 0
+        bad = 0
+        for x in range(width):
+            pixel = y * width + x
+            for s in range(s0, s1):
+                key = sample_key(seed, pixel, s)
+                fx, fy = _pixel_point(filter_kind, key, x, y)
+                o, dr = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, rand_key(key, 2),
+                                      rand_key(key, 3))
+                tau = cam_time[0]
+                if cam_time[1] > cam_time[0]:
+                    tau = cam_time[0] + (cam_time[1] - cam_time[0]) * rand_key(key, DIM_TIME)
+                rgb, n, t, obj, alb, nrm = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth, mode, key,
+                                                      scratch, sa.background)
+                rays += n
+                r, g, b = rgb
+                if not (math.isfinite(r) and math.isfinite(g) and math.isfinite(b)):
+                    bad += 1  # a sample that divided by a vanishing pdf: dropped, never on the film
+                    r = g = b = 0.0
+                sums[y, x, 0] += r
+                sums[y, x, 1] += g
+                sums[y, x, 2] += b
+                sums2[y, x, 0] += r * r
+                sums2[y, x, 1] += g * g
+                sums2[y, x, 2] += b * b
+                for c in range(3):
+                    guides[y, x, c] += alb[c]
+                    guides[y, x, 3 + c] += nrm[c]
+                if s == 0 and t >= 0.0:
+                    depth[y, x] = t
+                    object_id[y, x] = obj
+        rays_per_row[y] += rays
+        bad_per_row[y] += bad
+
+
+class _StopOnSigint:
+    """While rendering in the main thread: the first Ctrl-C asks to stop after the current pass (the image is
+    kept); a second one interrupts at once."""
+
+    def __init__(self):
+        self.requested = False
+        self._previous = None
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    def __exit__(self, *exc):
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+        return False
+
+
+def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film:
+    """Path-trace `compiled` (a `CompiledScene` with its `emitters`) through `camera` with `settings`.
+
+    `progress(fraction)` is called after each band of rows; `on_pass(film)` after each pass with the image so far
+    (for checkpoints). Stops early after the pass that crosses `settings.time_limit`, or on Ctrl-C."""
+    width, height = settings.width, settings.height
+    check_memory(width, height, bytes_per_pixel=200)
+    threads = set_threads(settings.threads)
+    cam_vecs, cam_params = camera_arrays(camera)
+    cam_time = np.array(camera.shutter, dtype=np.float64)
+    sa, em = compiled.arrays, compiled.emitters
+    max_depth = settings.resolved_max_depth()
+    max_depth = np.int64(-1 if max_depth is None else max_depth)
+    mode = np.int64(_MODES[settings.sampling])
+    filter_kind = np.int64(FILTER_CENTRE if settings.antialias == "none" else
+                           FILTER_GAUSSIAN if settings.filter == "gaussian" else FILTER_BOX)
+    seed = np.int64(settings.seed)
+    sums = np.zeros((height, width, 3))
+    sums2 = np.zeros((height, width, 3))
+    guides = np.zeros((height, width, 6))
+    depth = np.full((height, width), np.inf, np.float32)
+    object_id = np.full((height, width), -1, np.int32)
+    rays_per_row = np.zeros(height, np.int64)
+    bad_per_row = np.zeros(height, np.int64)
+    bands = row_bands(height, bands=16)
+    spp, done, passes, stopped = settings.spp, 0, 0, None
+    started = _time.perf_counter()
+    per_sample_s = None
+
+    def film(final=False):
+        return _film(sums, sums2, guides, depth, object_id, done, settings, threads, rays_per_row, bad_per_row,
+                     passes, stopped, final)
+
+    with _StopOnSigint() as sigint:
+        while done < spp:
+            # pass size: one sample first, then passes of about PASS_SECONDS
+            n = 1 if per_sample_s is None else max(1, min(spp - done, int(PASS_SECONDS / max(per_sample_s, 1e-9))))
+            t0 = _time.perf_counter()
+            for y0, y1 in bands:
+                _pass_rows(sa, em, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
+                           np.int64(y1), np.int64(done), np.int64(done + n), seed, max_depth, mode, filter_kind,
+                           sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row)
+                if progress is not None:
+                    fraction = (done + n * y1 / height) / spp
+                    if settings.time_limit is not None:
+                        fraction = max(fraction, min((_time.perf_counter() - started) / settings.time_limit, 1.0))
+                    progress(min(fraction, 1.0))
+            done += n
+            passes += 1
+            per_sample_s = (_time.perf_counter() - t0) / n
+            if sigint.requested:
+                stopped = "interrupted"
+            elif settings.time_limit is not None and _time.perf_counter() - started >= settings.time_limit:
+                stopped = "time limit"
+            if stopped is not None or done >= spp:
+                break
+            if on_pass is not None:
+                on_pass(film())
+    return film(final=True)
+
+
+def _film(sums, sums2, guides, depth, object_id, n, settings, threads, rays_per_row, bad_per_row, passes, stopped,
+          final) -> Film:
+    """The image and AOVs from the accumulation buffers after n samples per pixel."""
+    mean = (sums / n).astype(np.float32)
+    albedo = (guides[:, :, :3] / n).astype(np.float32)
+    normal = guides[:, :, 3:] / n
+    length = np.linalg.norm(normal, axis=2, keepdims=True)
+    normal = np.where(length > 0, normal / np.maximum(length, 1e-30), 0.0).astype(np.float32)
+    radiance = mean
+    if settings.denoise and final:
+        from ..denoise import denoise
+
+        radiance = denoise(mean, albedo, normal)
+    if n > 1:
+        variance = np.maximum(sums2 - sums * sums / n, 0.0) / (n * (n - 1.0))
+    else:
+        variance = np.zeros_like(sums)
+    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
+                "samples": np.full(depth.shape, n, np.int32), "variance": variance.astype(np.float32), "noisy": mean}
+    aovs = {name: all_aovs[name] for name in settings.aov}
+    extra = {"spp": int(n), "passes": int(passes), "stopped": stopped,
+             "discarded_samples": int(bad_per_row.sum())}
+    return Film(radiance, aovs, int(rays_per_row.sum()), threads, primary_rays=int(n) * depth.size, extra=extra)

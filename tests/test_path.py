@@ -1,0 +1,259 @@
+"""Method path: closed forms (the furnace, a form factor, the depth series), agreement with whitted on direct
+light, determinism, and the film's guards.
+
+Expected values are exact; the tolerances are statistical: each test compares a mean with its standard error
+(from the variance AOV), so a wrong factor of a few per cent fails while noise does not.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import lumos
+from lumos.errors import LumosError, LumosWarning
+
+
+def path(scene, **settings):
+    settings.setdefault("method", "path")
+    return lumos.render(scene, **settings)
+
+
+def _mean_and_error(img, mask=None):
+    """Mean radiance per channel over the masked pixels and its standard error (from the variance AOV)."""
+    arr = img.array.reshape(-1, 3).astype(np.float64)
+    var = img.aovs["variance"].reshape(-1, 3).astype(np.float64)
+    if mask is not None:
+        arr, var = arr[mask.ravel()], var[mask.ravel()]
+    return arr.mean(axis=0), np.sqrt(var.sum(axis=0)) / len(arr)
+
+
+# ------------------------------------------------------------------------------------------------ furnace
+
+def furnace(albedo, emission, enclosure="sphere"):
+    """The camera inside a closed, emitting, diffusely reflecting enclosure: every pixel sees Le/(1 − ρ)."""
+    material = {"kd": albedo, "emission": emission}
+    if enclosure == "sphere":  # an ellipsoid: area-sampled as an emitter, seen from inside
+        shape = {"type": "sphere", "radius": 1.0, "material": material,
+                 "transform": {"scale": [2.0, 1.5, 1.8], "rotate": [10, 20, 0]}}
+    elif enclosure == "round sphere":  # uniform scale: sampled by the cone it subtends, which is none from inside
+        shape = {"type": "sphere", "radius": 2.0, "material": material}
+    else:
+        shape = {"type": "box", "min": [-2, -1.5, -1.8], "max": [2, 1.6, 1.9], "material": material}
+    return {"camera": {"position": [0, 0, 0.5], "look_at": [0, 0, -1], "fov": 100},
+            "objects": [shape]}
+
+
+@pytest.mark.parametrize("enclosure", ["sphere", "round sphere", "box"])
+@pytest.mark.parametrize("albedo", [0.5, 0.8])
+def test_furnace(enclosure, albedo):
+    """Pbrt's and Mitsuba's classic check, with roulette on and unbounded depth: L = Le/(1 − ρ), to 1%."""
+    le = 0.3
+    img = path(furnace(albedo, le, enclosure), width=24, height=16, spp=64, aov=["variance"], seed=1)
+    mean, err = _mean_and_error(img)
+    want = le / (1.0 - albedo)
+    assert np.all(np.abs(mean - want) < max(4 * err.max(), 1e-4)), (mean, err, want)
+    assert np.all(np.abs(mean - want) < 0.01 * want)
+
+
+@pytest.mark.parametrize("max_depth", [0, 1, 3])
+def test_max_depth_counts_bounces_after_the_first_hit(max_depth):
+    """Emission is gathered at vertices 0 … D+1 (light sampling at 0 … D): inside the furnace the image is the
+    partial sum Le·Σ_{k=0}^{D+1} ρ^k, which is what Mitsuba renders at its max_depth D + 2."""
+    rho, le = 0.6, 1.0
+    img = path(furnace(rho, le, "box"), width=16, height=12, spp=64, max_depth=max_depth, aov=["variance"])
+    mean, err = _mean_and_error(img)
+    want = le * sum(rho**k for k in range(max_depth + 2))
+    assert np.all(np.abs(mean - want) < max(4 * err.max(), 1e-6)), (mean, want)
+
+
+def test_ambient_is_ignored():
+    """Global illumination replaces the ambient term: ka and the scene's ambient light nothing."""
+    scene = {"ambient": 1.0, "objects": [{"type": "sphere", "material": {"ka": 1.0, "kd": 0.5}}]}
+    assert path(scene, width=8, height=8, spp=4).array.max() == 0.0
+
+
+# ------------------------------------------------------------------------------------ analytic form factor
+
+def test_parallel_squares_form_factor():
+    """An emitting unit square 1 above a Lambertian unit square of albedo ρ: the receiver's mean radiance is
+    ρ·F·Le with F = 0.19982 (parallel unit squares at distance 1). An orthographic camera looks at the receiver
+    through the gap between the squares, along a slope that passes under the emitter."""
+    rho, le = 0.7, 2.0
+    scene = {
+        "camera": {"type": "orthographic", "position": [-4.0, 2.0, 0.0], "look_at": [0.0, 0.0, 0.0],
+                   "size": 1.2},
+        "lights": [{"type": "area", "shape": "rect", "corner": [-0.5, 1.0, -0.5], "edge_u": [1, 0, 0],
+                    "edge_v": [0, 0, 1], "radiance": le}],  # emits down: along edge_u × edge_v
+        "objects": [{"type": "mesh", "vertices": [[-0.5, 0, -0.5], [0.5, 0, -0.5], [0.5, 0, 0.5], [-0.5, 0, 0.5]],
+                     "faces": [[0, 1, 2], [0, 2, 3]], "material": {"kd": rho}}],
+    }
+    # pixel centres, so that every pixel counted lies wholly on the receiver
+    img = path(scene, width=96, height=96, spp=64, max_depth=0, antialias="none", aov=["object_id", "variance"])
+    receiver = img.aovs["object_id"] == 0
+    assert receiver.sum() > 1000
+    mean, err = _mean_and_error(img, receiver)
+    want = rho * 0.19982 * le
+    assert np.all(np.abs(mean - want) < 4 * err + 1e-4 * want), (mean, err, want)
+    assert np.all(np.abs(mean - want) < 0.01 * want)
+
+
+# ------------------------------------------------------------------------- direct light across methods
+
+DIRECT_SCENE = {  # lights placed so that none shadows another onto what the camera sees (in path, area lights
+    # are surfaces that cast shadows; whitted's shadow rays pass through them)
+    "camera": {"position": [0, 2.2, 6.5], "look_at": [0, 0.6, 0], "fov": 42},
+    "materials": {"floor": {"kd": [0.7, 0.7, 0.7]}, "red": {"kd": [0.7, 0.25, 0.2]}, "blue": {"kd": [0.2, 0.3, 0.75]}},
+    "lights": [
+        {"type": "point", "position": [2.0, 3.5, 2.0], "intensity": [6.0, 5.5, 5.0], "attenuation": [0, 0, 1]},
+        {"type": "directional", "direction": [1.0, -0.25, 0.1], "intensity": 0.5},
+        {"type": "area", "shape": "rect", "corner": [1.2, 4.0, -1.0], "edge_u": [1.0, 0, 0], "edge_v": [0, 0, 1.2],
+         "radiance": 8.0, "samples": 16},
+        {"type": "area", "shape": "sphere", "center": [-1.8, 3.2, -1.0], "radius": 0.35, "radiance": 12.0,
+         "samples": 16},
+    ],
+    "objects": [
+        {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor"},
+        {"type": "sphere", "center": [-0.6, 0.8, 0.2], "radius": 0.8, "material": "red"},
+        {"type": "box", "min": [0.5, 0.0, -0.6], "max": [1.6, 1.1, 0.5], "material": "blue",
+         "transform": {"rotate": [0, 25, 0]}},
+    ],
+}
+
+
+def _block_means(a, k=8):
+    h, w = a.shape[0] // k * k, a.shape[1] // k * k
+    return a[:h, :w].reshape(h // k, k, w // k, k, -1).mean(axis=(1, 3))
+
+
+@pytest.mark.slow
+def test_direct_light_agrees_with_whitted():
+    """max_depth 0 on a diffuse scene with point, directional, rect and sphere lights: path's direct light is
+    whitted's (DESIGN.md §3 units), a z-test on every 8×8 block and every channel."""
+    w, h = 64, 48
+    p = path(DIRECT_SCENE, width=w, height=h, spp=256, max_depth=0, aov=["variance"], seed=3)
+    runs = [lumos.render(DIRECT_SCENE, method="whitted", width=w, height=h, spp=64, max_depth=0, seed=s).array
+            for s in (1, 2)]
+    wt = 0.5 * (runs[0] + runs[1])
+    var_w = 0.25 * (runs[0] - runs[1]) ** 2  # the variance of the mean of the two whitted renders, per pixel
+    var_p = p.aovs["variance"]
+    k = 8
+    diff = _block_means(p.array - wt, k)
+    se = np.sqrt(_block_means(var_p + var_w, k) / (k * k))
+    z = np.abs(diff) / np.maximum(se, 1e-6)
+    assert z.max() < 5.0, (z.max(), np.unravel_index(z.argmax(), z.shape))
+    lit = wt.max(axis=2) < 2.0  # the surfaces, not the lights seen directly (a few bright edge pixels)
+    rel = np.abs(p.array[lit].mean(axis=0) - wt[lit].mean(axis=0)) / wt[lit].mean(axis=0)
+    assert rel.max() < 0.01
+
+
+# ------------------------------------------------------------------------------------- determinism
+
+SMALL_BOX = {  # a closed box, the camera inside
+    "camera": {"position": [0, 0, 0.9], "look_at": [0, 0, 0], "fov": 75},
+    "lights": [{"type": "area", "shape": "rect", "corner": [-0.3, 0.99, -0.3], "edge_u": [0.6, 0, 0],
+                "edge_v": [0, 0, 0.6], "radiance": 8.0}],
+    "objects": [
+        {"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": {"kd": 0.7}},
+        {"type": "sphere", "center": [-0.4, -0.6, 0.0], "radius": 0.4, "material": {"kd": 0.3, "ks": 0.5,
+                                                                                     "shininess": 40}},
+        {"type": "sphere", "center": [0.45, -0.6, 0.3], "radius": 0.35, "material": {"kt": 1.0, "ior": 1.5}},
+        {"type": "sphere", "center": [0.3, 0.3, -0.5], "radius": 0.3, "material": {"kr": 0.9}},
+    ],
+}
+
+
+def test_same_image_for_any_thread_count_and_pass_split(monkeypatch):
+    import numba
+
+    from lumos.methods import path as path_method
+
+    settings = dict(width=20, height=14, spp=12, aov=["variance", "albedo", "normal", "depth"], seed=7)
+    one = path(SMALL_BOX, threads=1, **settings)
+    if numba.config.NUMBA_NUM_THREADS > 1:
+        two = path(SMALL_BOX, threads=2, **settings)
+        np.testing.assert_array_equal(one.array, two.array)
+    monkeypatch.setattr(path_method, "PASS_SECONDS", 1e-9)  # one sample per pass
+    split = path(SMALL_BOX, **settings)
+    assert split.stats["passes"] == 12
+    np.testing.assert_array_equal(one.array, split.array)
+    for name in settings["aov"]:
+        np.testing.assert_array_equal(one.aovs[name], split.aovs[name])
+    other_seed = path(SMALL_BOX, **{**settings, "seed": 8})
+    assert not np.array_equal(one.array, other_seed.array)
+
+
+def test_variance_aov_is_the_variance_of_the_mean():
+    """Across independent renders (seeds), the pixels' spread matches the variance AOV on average."""
+    settings = dict(width=12, height=10, spp=16, aov=["variance"])
+    imgs = [path(SMALL_BOX, seed=s, **settings) for s in range(12)]
+    stack = np.stack([im.array for im in imgs])
+    spread = stack.var(axis=0, ddof=1).mean()
+    predicted = np.mean([im.aovs["variance"] for im in imgs])
+    assert 0.6 < spread / predicted < 1.6
+
+
+# ---------------------------------------------------------------------------------------- guards
+
+def test_nan_prone_scenes_leave_the_film_finite():
+    """A light of vanishing area, a surface seen edge-on, glass of ior 1, a needle-sharp lobe, a mirror inside
+    glass: the film stays finite, and dropped samples are counted."""
+    scene = {
+        "camera": {"position": [0, 0.0, 4], "look_at": [0, 0, 0], "fov": 60},
+        "lights": [{"type": "area", "shape": "rect", "corner": [0, 1.5, 0], "edge_u": [1e-8, 0, 0],
+                    "edge_v": [0, 0, 1e-8], "radiance": 1e6},
+                   {"type": "point", "position": [0, 0, 0], "intensity": 1.0}],
+        "objects": [
+            {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": {"kd": 0.5}},  # edge-on
+            {"type": "sphere", "center": [-1, 0.5, 0], "radius": 0.5, "material": {"kt": 1.0, "ior": 1.0}},
+            {"type": "sphere", "center": [1, 0.5, 0], "radius": 0.5, "material": {"ks": 1.0, "shininess": 1e6}},
+            {"type": "sphere", "center": [0, 0.5, -1], "radius": 0.5, "material": {"kt": 0.5, "kr": 0.5,
+                                                                                    "ior": 1.5}},
+            {"type": "disk", "center": [0, 1.0, 1], "normal": [0, 0, 1], "radius": 0.3,
+             "material": {"emission": 1e-300}},
+        ],
+    }
+    img = path(scene, width=24, height=24, spp=8, aov=["variance", "albedo", "normal"])
+    assert np.all(np.isfinite(img.array))
+    for name in ("variance", "albedo", "normal"):
+        assert np.all(np.isfinite(img.aovs[name]))
+    assert img.stats["discarded_samples"] >= 0
+
+
+def test_material_that_creates_energy_is_scaled_with_a_warning():
+    scene = {"materials": {"hot": {"kd": 0.8, "ks": 0.5}},
+             "objects": [{"type": "sphere", "material": "hot"}]}
+    with pytest.warns(LumosWarning, match="material 'hot'.*1.3.*create energy"):
+        path(scene, width=4, height=4, spp=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        path({"objects": [{"type": "sphere", "material": {"kd": 0.5, "ks": 0.5}}]}, width=4, height=4, spp=1)
+
+
+def test_path_only_settings_are_refused_elsewhere():
+    scene = {"objects": [{"type": "sphere"}]}
+    for key, value in (("time_limit", 1.0), ("denoise", True), ("filter", "gaussian"), ("sampling", "light")):
+        with pytest.raises(LumosError, match=f"render.{key}: .*path feature"):
+            lumos.render(scene, method="whitted", **{key: value})
+    with pytest.raises(LumosError, match="variance.*path"):
+        lumos.render(scene, method="raycast", aov=["variance"])
+    with pytest.raises(LumosError, match="adaptive.*whitted"):
+        path(scene, antialias="adaptive")
+
+
+def test_time_limit_stops_after_the_pass_that_crosses_it():
+    img = path(SMALL_BOX, width=64, height=48, spp=1 << 20, time_limit=0.5)
+    assert img.stats["stopped"] == "time limit"
+    assert 1 <= img.stats["spp"] < 1 << 20
+    assert img.stats["render_s"] < 5.0
+    assert np.all(np.isfinite(img.array)) and img.array.mean() > 0
+
+
+def test_gaussian_filter_keeps_the_mean():
+    """Filter importance sampling: every sample weighs 1, so a flat field stays flat and the furnace holds."""
+    img = path(furnace(0.5, 0.3, "box"), width=16, height=12, spp=32, filter="gaussian", aov=["variance"])
+    mean, err = _mean_and_error(img)
+    assert np.all(np.abs(mean - 0.6) < 4 * err.max() + 1e-6)

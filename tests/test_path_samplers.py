@@ -1,0 +1,327 @@
+"""The path tracer's samplers against their pdfs (χ² tests, as Mitsuba checks its BSDFs and emitters), and the
+energy of the Phong lobe (the white furnace).
+
+Every sampler here is the kernel the path tracer calls (`kernels.bsdf`, `kernels.emitters`), driven by a small
+batch loop; every pdf is the one its MIS weights use. A sampler and its pdf that disagree anywhere by more than
+noise fail the test.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import pytest
+
+from chi2 import chi2_directions, chi2_discrete, frame_z, significance_level
+
+import lumos
+from lumos.compile import compile_scene
+from lumos.kernels import bsdf
+from lumos.kernels.emitters import emitter_pdf, sample_emitter
+from lumos.kernels.surface import surface_at
+from lumos.kernels.traverse import closest_hit
+from lumos.kernels.views import geometry_of, lighting_of, surfaces_of
+
+#: Independent χ² tests in this file: each passes at the level that keeps the chance of a false alarm among all
+#: of them at 1%.
+N_TESTS = 24
+LEVEL = significance_level(0.01, N_TESTS)
+
+# ---------------------------------------------------------------------------------------------- BSDF lobes
+
+
+@numba.njit(cache=True)
+def _smooth_batch(kd, ks, exponent, p_d, p_s, n, wo, u):
+    """`bsdf.sample_smooth` on each row of u (m, 3): (directions (m, 3), NaN where it fails; weights (m, 3))."""
+    m = u.shape[0]
+    dirs = np.full((m, 3), np.nan)
+    weights = np.zeros((m, 3))
+    for i in range(m):
+        wi, w, pdf = bsdf.sample_smooth(kd, ks, exponent, p_d, p_s, n, wo, u[i, 0] * (p_d + p_s), u[i, 1], u[i, 2])
+        if pdf > 0.0:
+            for c in range(3):
+                dirs[i, c] = wi[c]
+                weights[i, c] = w[c]
+    return dirs, weights
+
+
+@numba.njit(cache=True)
+def _smooth_pdf(kd, ks, exponent, p_d, p_s, n, wo, dirs):
+    out = np.empty(dirs.shape[0])
+    for i in range(dirs.shape[0]):
+        wi = (dirs[i, 0], dirs[i, 1], dirs[i, 2])
+        out[i] = bsdf.eval_smooth(kd, ks, exponent, p_d, p_s, n, wo, wi)[2]
+    return out
+
+
+def _unit(v):
+    v = np.asarray(v, np.float64)
+    return tuple(v / np.linalg.norm(v))
+
+
+def _smooth_test(p_d, p_s, exponent, wo, seed=0):
+    n = (0.0, 0.0, 1.0)
+    kd, ks = (p_d,) * 3, (p_s,) * 3
+    rng = np.random.default_rng(seed)
+    u = rng.random((200_000, 3))
+
+    def sample(u2):
+        return _smooth_batch(kd, ks, float(exponent), p_d, p_s, n, wo, np.column_stack([u[: len(u2), 0], u2]))[0]
+
+    def pdf(dirs):
+        return _smooth_pdf(kd, ks, float(exponent), p_d, p_s, n, wo, np.ascontiguousarray(dirs))
+
+    return chi2_directions(sample, pdf, n_samples=len(u), frame=frame_z(n), sphere=False, seed=seed)
+
+
+@pytest.mark.parametrize("p_d, p_s, exponent, wo", [
+    (1.0, 0.0, 1.0, (0.0, 0.0, 1.0)),                 # cosine hemisphere
+    (0.0, 1.0, 20.0, _unit((0.0, 0.0, 1.0))),          # Phong lobe at normal incidence
+    (0.0, 1.0, 8.0, _unit((1.0, 0.3, 0.6))),           # Phong lobe at 60°: part of it falls below the surface
+    (0.4, 0.6, 50.0, _unit((-0.5, 0.2, 0.8))),         # the mixture, as the path tracer samples it
+])
+def test_smooth_lobes_follow_their_pdf(p_d, p_s, exponent, wo):
+    result = _smooth_test(p_d, p_s, exponent, wo)
+    assert result.p_value > LEVEL, result.message
+
+
+def test_a_wrong_phong_exponent_is_detected():
+    """The test has the power to see a lobe drawn with exponent 16 while its pdf says 20."""
+    n, wo = (0.0, 0.0, 1.0), (0.0, 0.0, 1.0)
+    rng = np.random.default_rng(3)
+    u = rng.random((200_000, 3))
+
+    def sample(u2):
+        return _smooth_batch((0.0,) * 3, (1.0,) * 3, 16.0, 0.0, 1.0, n, wo, np.column_stack([u[:, 0], u2]))[0]
+
+    def pdf(dirs):
+        return _smooth_pdf((0.0,) * 3, (1.0,) * 3, 20.0, 0.0, 1.0, n, wo, np.ascontiguousarray(dirs))
+
+    assert chi2_directions(sample, pdf, n_samples=len(u), frame=frame_z(n), sphere=False).p_value < 1e-6
+
+
+@pytest.mark.parametrize("exponent", [1.0, 10.0, 100.0, 1000.0])
+def test_white_furnace_phong_lobe(exponent):
+    """ks = 1: the lobe reflects all the light at normal incidence (its (n+2)/2π normalisation) and never more
+    than all of it (at 70° part of the lobe is below the surface and is lost)."""
+    n = (0.0, 0.0, 1.0)
+    rng = np.random.default_rng(int(exponent))
+    u = rng.random((400_000, 3))
+    for angle, expect_one in ((0.0, True), (45.0, False), (70.0, False)):
+        a = math.radians(angle)
+        wo = (math.sin(a), 0.0, math.cos(a))
+        _, w = _smooth_batch((0.0,) * 3, (1.0,) * 3, exponent, 0.0, 1.0, n, wo, u)
+        albedo = w[:, 0].mean()
+        err = 4.0 * w[:, 0].std() / math.sqrt(len(u)) + 1e-12
+        assert albedo <= 1.0 + err, (angle, albedo)
+        if expect_one:
+            assert abs(albedo - 1.0) <= max(err, 1e-3), albedo
+
+
+def test_white_furnace_lambert():
+    n = (0.0, 0.0, 1.0)
+    u = np.random.default_rng(7).random((100_000, 3))
+    _, w = _smooth_batch((1.0,) * 3, (0.0,) * 3, 1.0, 1.0, 0.0, n, (0.6, 0.0, 0.8), u)
+    np.testing.assert_allclose(w, 1.0, rtol=1e-12)  # cosine sampling: f·cos/pdf = kd exactly
+
+
+# ------------------------------------------------------------------------------------------------ dielectric
+
+
+def _fresnel_reference(cos_i, n1, n2):
+    """Fresnel's equations for unpolarised light, written out independently of the kernel."""
+    sin_t = n1 / n2 * math.sqrt(max(0.0, 1.0 - cos_i**2))
+    if sin_t >= 1.0:
+        return 1.0
+    cos_t = math.sqrt(1.0 - sin_t**2)
+    rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
+    rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t)
+    return 0.5 * (rs**2 + rp**2)
+
+
+@pytest.mark.parametrize("n1, n2", [(1.0, 1.5), (1.5, 1.0), (1.33, 1.5)])
+def test_fresnel_and_snell(n1, n2):
+    for cos_i in np.linspace(0.0, 1.0, 41):
+        F, cos_t = bsdf.fresnel_dielectric(cos_i, n1 / n2)
+        assert F == pytest.approx(_fresnel_reference(cos_i, n1, n2), abs=1e-12)
+        if F < 1.0:  # Snell: n1 sin θi = n2 sin θt
+            assert n1 * math.sqrt(1 - cos_i**2) == pytest.approx(n2 * math.sqrt(1 - cos_t**2), abs=1e-12)
+    assert bsdf.fresnel_dielectric(1.0, 1.0)[0] == 0.0  # ior 1: nothing reflects
+
+
+@numba.njit(cache=True)
+def _dielectric_counts(wo, n, eta, u):
+    reflected = 0
+    for i in range(u.shape[0]):
+        wi, through, F = bsdf.sample_dielectric(wo, n, eta, u[i])
+        if not through:
+            reflected += 1
+    return reflected
+
+
+@pytest.mark.parametrize("angle, eta", [(0.0, 1 / 1.5), (60.0, 1 / 1.5), (85.0, 1 / 1.5), (30.0, 1.5)])
+def test_dielectric_chooses_reflection_with_the_fresnel_weight(angle, eta):
+    a = math.radians(angle)
+    wo = (math.sin(a), 0.0, math.cos(a))
+    u = np.random.default_rng(11).random(200_000)
+    reflected = _dielectric_counts(wo, (0.0, 0.0, 1.0), eta, u)
+    F = _fresnel_reference(math.cos(a), 1.0, 1.0 / eta)
+    p = chi2_discrete(np.array([reflected, len(u) - reflected]), np.array([F, 1.0 - F]))
+    assert p > LEVEL, (reflected / len(u), F)
+
+
+def test_dielectric_refracts_by_snell():
+    a = math.radians(40.0)
+    wo = (math.sin(a), 0.0, math.cos(a))
+    wi, through, F = bsdf.sample_dielectric(wo, (0.0, 0.0, 1.0), 1 / 1.5, 0.999)
+    assert through and wi[2] < 0.0
+    assert math.sin(a) == pytest.approx(1.5 * math.hypot(wi[0], wi[1]), abs=1e-12)
+    assert wi[0] < 0.0  # on the other side of the normal from wo
+
+
+# -------------------------------------------------------------------------------------------------- emitters
+
+
+def _views(sa):
+    """The traversal, surface and lighting views, built in Python (a view made inside a jitted caller that keeps
+    Numba's reference counting would be released by it although the view function did not count it)."""
+    return geometry_of(sa), surfaces_of(sa), lighting_of(sa)
+
+
+@numba.njit(cache=True)
+def _emitter_batch(em, geo, surf, lit, p, u, check_visible):
+    """`sample_emitter` from point p for each row of u (m, 3); directions whose sampled point is not the first
+    surface along them (the far side of a solid) come back as NaN (failed, as their shadow ray would be)."""
+    stack = np.empty(64, np.int64)
+    stack_t = np.empty(64)
+    m = u.shape[0]
+    dirs = np.full((m, 3), np.nan)
+    for i in range(m):
+        wi, dist, led, les, pdf, delta = sample_emitter(em, lit, surf, p, u[i, 0], u[i, 1], u[i, 2], 0.0)
+        if not pdf > 0.0:
+            continue
+        if check_visible:
+            hit = closest_hit(geo, p, wi, 0.0, 1e30, stack, stack_t, 0.0)
+            if hit[0] < 0.0 or abs(hit[0] - dist) > 1e-7 * max(dist, 1.0):
+                continue
+        dirs[i, 0], dirs[i, 1], dirs[i, 2] = wi
+    return dirs
+
+
+@numba.njit(cache=True)
+def _emitter_pdfs(em, geo, surf, lit, p, dirs):
+    """The MIS pdf `emitter_pdf` of each direction: of the emitter entry first hit along it, 0 if none."""
+    stack = np.empty(64, np.int64)
+    stack_t = np.empty(64)
+    out = np.zeros(dirs.shape[0])
+    for i in range(dirs.shape[0]):
+        d = (dirs[i, 0], dirs[i, 1], dirs[i, 2])
+        hit = closest_hit(geo, p, d, 0.0, 1e30, stack, stack_t, 0.0)
+        if hit[0] < 0.0:
+            continue
+        ref = hit[1]
+        q, n_geo, n_sh, uu, vv, mat, obj, light = surface_at(surf, p, d, hit[0], ref, hit[2], hit[3], hit[4], 0.0)
+        if light >= 0:
+            e = em.light_emit[light]
+            if n_geo[0] * d[0] + n_geo[1] * d[1] + n_geo[2] * d[2] >= 0.0 and lit.light_kind[light] != 4:
+                continue  # the back of a one-sided light: never sampled
+        elif ref >= 0:
+            e = em.tri_emit[ref]
+        else:
+            e = em.shape_emit[~ref]
+        if e >= 0:
+            out[i] = emitter_pdf(em, lit, surf, e, p, d, hit[0], n_geo, ref, hit[4], 0.0)
+    return out
+
+
+def _emitter_chi2(scene_objects, lights=(), p=(0.0, 0.0, 0.0), seed=0):
+    scene = lumos.load_scene({"objects": list(scene_objects), "lights": list(lights)})
+    compiled = compile_scene(scene, scene.render.model_copy(update={"method": "path"}))
+    em, sa = compiled.emitters, compiled.arrays
+    rng = np.random.default_rng(seed)
+    u_pick = rng.random(200_000)
+
+    def sample(u2):
+        return _emitter_batch(em, *_views(sa), p, np.column_stack([u_pick[: len(u2)], u2]), True)
+
+    def pdf(dirs):
+        return _emitter_pdfs(em, *_views(sa), p, np.ascontiguousarray(dirs))
+
+    return chi2_directions(sample, pdf, n_samples=len(u_pick), res=(48, 96), seed=seed)
+
+
+EMISSIVE = {"kd": 0.0, "emission": 1.0}
+
+EMITTER_CASES = {
+    "rect light": ([], [{"type": "area", "shape": "rect", "corner": [-1, 0.6, -0.5], "edge_u": [2, 0, 0],
+                         "edge_v": [0, 0.3, 1.2], "radiance": 1.0}]),
+    "disk light": ([], [{"type": "area", "shape": "disk", "center": [0.3, -0.8, 0.2], "normal": [0.2, 1, 0.1],
+                         "radius": 0.9, "radiance": 2.0}]),
+    "sphere light": ([], [{"type": "area", "shape": "sphere", "center": [0.5, 0.6, -0.7], "radius": 0.6,
+                           "radiance": 1.0}]),
+    "emissive triangle": ([{"type": "triangle", "vertices": [[-1, -0.5, 0.8], [1.2, -0.4, 1.0], [0.1, 1.2, 0.7]],
+                            "material": EMISSIVE}], []),
+    "emissive sphere": ([{"type": "sphere", "center": [0.2, 0.9, 0.6], "radius": 0.5, "material": EMISSIVE}], []),
+    "emissive ellipsoid": ([{"type": "sphere", "radius": 1.0, "material": EMISSIVE,
+                             "transform": {"scale": [0.9, 0.4, 0.6], "rotate": [30, 40, 0],
+                                           "translate": [0.3, 0.2, 1.3]}}], []),
+    "emissive box": ([{"type": "box", "min": [-0.5, -0.3, 0.8], "max": [0.6, 0.4, 1.5], "material": EMISSIVE,
+                       "transform": {"rotate": [20, 35, 10], "scale": [1.2, 0.8, 1.0]}}], []),
+    "emissive cylinder": ([{"type": "cylinder", "base": [-0.6, -0.5, 1.0], "top": [0.5, 0.6, 1.2], "radius": 0.4,
+                            "material": EMISSIVE, "transform": {"scale": [1.0, 1.5, 0.8]}}], []),
+    "emissive cone": ([{"type": "cone", "base": [0.5, -0.6, -1.0], "top": [-0.4, 0.5, -1.1], "radius": 0.5,
+                        "material": EMISSIVE}], []),
+    "emissive disk": ([{"type": "disk", "center": [0.0, -0.9, 0.1], "normal": [0.3, 1, 0], "radius": 0.8,
+                        "material": EMISSIVE}], []),
+    "several lights by power": (
+        [{"type": "sphere", "center": [0.2, 0.9, 0.6], "radius": 0.4, "material": {"emission": 3.0}}],
+        [{"type": "area", "shape": "rect", "corner": [-1, -0.7, -0.6], "edge_u": [0, 0, 1.5], "edge_v": [1.6, 0, 0],
+          "radiance": 0.5},
+         {"type": "area", "shape": "sphere", "center": [-0.8, 0.2, -0.6], "radius": 0.3, "radiance": 4.0}]),
+}
+
+
+@pytest.mark.parametrize("case", list(EMITTER_CASES))
+def test_emitter_sampling_follows_its_pdf(case):
+    objects, lights = EMITTER_CASES[case]
+    result = _emitter_chi2(objects, lights)
+    assert result.p_value > LEVEL, result.message
+    assert result.pdf_integral > 0.05  # the case tests something: the emitter is seen from p
+
+
+def test_a_wrong_emitter_pdf_is_detected():
+    """The same test, given a pdf that is off by 10% on part of the sphere, fails."""
+    objects, lights = EMITTER_CASES["emissive sphere"][0], []
+    scene = lumos.load_scene({"objects": objects})
+    compiled = compile_scene(scene, scene.render.model_copy(update={"method": "path"}))
+    em, sa = compiled.emitters, compiled.arrays
+    u_pick = np.random.default_rng(0).random(200_000)
+
+    def sample(u2):
+        return _emitter_batch(em, *_views(sa), (0.0, 0.0, 0.0), np.column_stack([u_pick, u2]), True)
+
+    def pdf(dirs):
+        dirs = np.ascontiguousarray(dirs)
+        return _emitter_pdfs(em, *_views(sa), (0.0, 0.0, 0.0), dirs) * np.where(dirs[:, 0] > 0.2, 1.1, 1.0)
+
+    assert chi2_directions(sample, pdf, n_samples=len(u_pick), res=(48, 96)).p_value < 1e-6
+
+
+def test_emitters_are_picked_by_power():
+    """Selection probabilities are proportional to π·Le·A (area lights, emissive primitives)."""
+    scene = lumos.load_scene({
+        "objects": [{"type": "mesh", "vertices": [[0, 0, 0], [2, 0, 0], [0, 1, 0], [2, 1, 0]],
+                     "faces": [[0, 1, 2], [1, 3, 2]], "material": {"emission": 2.0}}],
+        "lights": [{"type": "area", "shape": "rect", "corner": [0, 2, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, 1],
+                    "radiance": 1.0},
+                   {"type": "area", "shape": "sphere", "center": [0, 5, 0], "radius": 0.5, "radiance": 3.0}]})
+    compiled = compile_scene(scene, scene.render.model_copy(update={"method": "path"}))
+    em = compiled.emitters
+    power = {"rect": 1.0 * 1.0, "sphere": 3.0 * 4 * math.pi * 0.25, "tri": 2.0 * 1.0}
+    total = power["rect"] + power["sphere"] + 2 * power["tri"]
+    np.testing.assert_allclose(em.emit_pmf[em.light_emit], [power["rect"] / total, power["sphere"] / total])
+    tri = em.tri_emit[em.tri_emit >= 0]
+    np.testing.assert_allclose(em.emit_pmf[tri], power["tri"] / total)
+    assert em.emit_cdf[-1] == 1.0 and np.all(np.diff(em.emit_cdf) >= 0)
