@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -187,13 +188,30 @@ def test_same_image_for_any_thread_count_and_pass_split(monkeypatch):
 
 
 def test_variance_aov_is_the_variance_of_the_mean():
-    """Across independent renders (seeds), the pixels' spread matches the variance AOV on average."""
+    """Across renders with other seeds, the pixels' spread matches the variance AOV on average with independent
+    samples, and stays below it with the stratified Sobol points (the AOV is then an upper bound)."""
     settings = dict(width=12, height=10, spp=16, aov=["variance"])
-    imgs = [path(SMALL_BOX, seed=s, **settings) for s in range(12)]
-    stack = np.stack([im.array for im in imgs])
-    spread = stack.var(axis=0, ddof=1).mean()
-    predicted = np.mean([im.aovs["variance"] for im in imgs])
-    assert 0.6 < spread / predicted < 1.6
+    for sampler, low, high in (("independent", 0.6, 1.6), ("sobol", 0.05, 1.0)):
+        imgs = [path(SMALL_BOX, seed=s, sampler=sampler, **settings) for s in range(12)]
+        stack = np.stack([im.array for im in imgs])
+        spread = stack.var(axis=0, ddof=1).mean()
+        predicted = np.mean([im.aovs["variance"] for im in imgs])
+        assert low < spread / predicted < high, (sampler, spread / predicted)
+
+
+def test_sobol_points_lower_the_error_without_bias():
+    """The same box with both samplers: the same mean (both unbiased), and a smaller error per pixel with the
+    Sobol points, against a converged render."""
+    settings = dict(width=16, height=12, max_depth=2)
+    ref = path(SMALL_BOX, spp=4096, **settings).array
+    errors = {}
+    for sampler in ("independent", "sobol"):
+        runs = np.stack([path(SMALL_BOX, spp=16, seed=s, sampler=sampler, **settings).array for s in range(8)])
+        errors[sampler] = np.sqrt(np.mean((runs - ref) ** 2))
+        means = runs.mean(axis=(1, 2, 3))
+        bias = means.mean() - ref.mean()
+        assert abs(bias) < 4 * means.std(ddof=1) / np.sqrt(len(means)) + 1e-3 * ref.mean(), (sampler, bias)
+    assert errors["sobol"] < 0.8 * errors["independent"], errors
 
 
 # ---------------------------------------------------------------------------------------- guards
@@ -257,3 +275,50 @@ def test_gaussian_filter_keeps_the_mean():
     img = path(furnace(0.5, 0.3, "box"), width=16, height=12, spp=32, filter="gaussian", aov=["variance"])
     mean, err = _mean_and_error(img)
     assert np.all(np.abs(mean - 0.6) < 4 * err.max() + 1e-6)
+
+
+# ------------------------------------------------------------------------------------------- Mitsuba 3
+
+MITSUBA_REF = Path(__file__).parent / "data" / "cornell_mitsuba"
+CORNELL = Path(__file__).parent.parent / "examples" / "path" / "cornell.yaml"
+
+
+def _blocks(a, k=8):
+    h, w = a.shape[:2]
+    return a.reshape(h // k, k, w // k, k, -1).mean(axis=(1, 3))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("ref, max_depth", [("ref_depth8_256.npy", 6), ("ref_depthinf_256.npy", -1)])
+def test_cornell_box_matches_mitsuba(ref, max_depth):
+    """examples/path/cornell.yaml against Mitsuba 3's own converged render of `mi.cornell_box()` (16,384 spp,
+    stored in tests/data/cornell_mitsuba; see its README): a z-test on every 8×8 block and channel, and the
+    block mean relative error (the issue's bar is 1% at 1024 spp; here 128 spp, so 1.5%)."""
+    reference = np.load(MITSUBA_REF / ref).astype(np.float64)
+    img = lumos.render(CORNELL, spp=128, max_depth=max_depth, aov=["variance"], seed=5)
+    ours = _blocks(img.array.astype(np.float64))
+    theirs = _blocks(reference)
+    se = np.sqrt(_blocks(img.aovs["variance"].astype(np.float64)) / 64 + (0.0015 / 8) ** 2)
+    z = (ours - theirs) / se
+    assert np.abs(z).max() < 5.5, np.abs(z).max()
+    assert abs(z.mean()) < 0.15, z.mean()  # no bias across the image
+    lit = theirs > 1e-3
+    assert np.mean(np.abs(ours - theirs)[lit] / theirs[lit]) < 0.015
+
+
+@pytest.mark.slow
+def test_cornell_box_agrees_with_a_live_mitsuba():
+    """Where Mitsuba 3 is installed: both renderers on the same box at 64×64, same means within noise."""
+    mi = pytest.importorskip("mitsuba")
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent.parent / "benchmarks"))
+    from peers_path import mitsuba_scene_dict  # noqa: E402
+
+    mi.set_variant("scalar_rgb")
+    their = np.asarray(mi.render(mi.load_dict(mitsuba_scene_dict(spp=64, max_depth=8, width=64, height=64)),
+                                 seed=3), np.float64)
+    ours = lumos.render(CORNELL, width=64, height=64, spp=256, aov=["variance"])
+    diff = ours.array.mean(axis=(0, 1)) - their.mean(axis=(0, 1))
+    se = np.sqrt(ours.aovs["variance"].mean(axis=(0, 1)) / (64 * 64) + their.var(axis=(0, 1)) / (64 * 64) / 4)
+    assert np.all(np.abs(diff) < 5 * se + 1e-4), (diff, se)

@@ -275,6 +275,8 @@ EMITTER_CASES = {
                         "material": EMISSIVE}], []),
     "emissive disk": ([{"type": "disk", "center": [0.0, -0.9, 0.1], "normal": [0.3, 1, 0], "radius": 0.8,
                         "material": EMISSIVE}], []),
+    "emissive rect": ([{"type": "rect", "corner": [-0.8, -0.6, 0.9], "edge_u": [1.5, 0.2, 0.3],
+                        "edge_v": [0.1, 1.2, -0.4], "material": EMISSIVE}], []),
     "several lights by power": (
         [{"type": "sphere", "center": [0.2, 0.9, 0.6], "radius": 0.4, "material": {"emission": 3.0}}],
         [{"type": "area", "shape": "rect", "corner": [-1, -0.7, -0.6], "edge_u": [0, 0, 1.5], "edge_v": [1.6, 0, 0],

@@ -63,7 +63,8 @@ def check_method_settings(settings: RenderSettings) -> None:
         path_only = [("time_limit", settings.time_limit is not None, "--time-limit"),
                      ("denoise", settings.denoise, "--denoise"),
                      ("filter", settings.filter != "box", "--filter"),
-                     ("sampling", settings.sampling != "mis", "--sampling")]
+                     ("sampling", settings.sampling != "mis", "--sampling"),
+                     ("sampler", settings.sampler != "sobol", "--sampler")]
         for key, given, flag in path_only:
             if given:
                 raise LumosError(f"render.{key}: {flag} is a path feature; method {method} does not take it")
@@ -156,7 +157,8 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
 
 
 def scene_info(scene: Scene) -> dict:
-    """What a scene holds, for `lumos info`: objects and lights by type, triangles, BVH size and depth, bounds."""
+    """What a scene holds, for `lumos info`: objects and lights by type (and the emissive objects, which the path
+    tracer samples as lights), triangles, BVH size and depth, bounds, and the methods that render it."""
     from collections import Counter
 
     from .compile import compile_scene
@@ -171,8 +173,10 @@ def scene_info(scene: Scene) -> dict:
         + (f"fov {cam.fov:g}" if cam.type == "perspective" else f"size {cam.size:g}")
         + (f", aperture {cam.aperture:g}" if cam.aperture > 0 else "")
     )
+    emissive = Counter(obj.type for obj in scene.objects if any(c > 0 for c in scene.material_of(obj).emission))
     return {
         "objects": dict(Counter(obj.type for obj in scene.objects)),
+        "emissive_objects": dict(emissive),
         "triangles": compiled.n_triangles,
         "lights": dict(lights),
         "materials": len(scene.materials),
@@ -182,4 +186,5 @@ def scene_info(scene: Scene) -> dict:
         "bounds": (tuple(map(float, compiled.bounds[0])), tuple(map(float, compiled.bounds[1]))),
         "camera": camera,
         "render": scene.render.model_dump(),
+        "methods": ", ".join(METHODS),
     }

@@ -28,7 +28,7 @@ from .errors import LumosError, LumosWarning
 
 #: render flags that override the scene's `render:` block (argparse dest == setting name).
 SETTING_FLAGS = ("method", "shading", "width", "height", "spp", "max_depth", "seed", "threads", "exposure", "aov",
-                 "antialias", "time_limit", "denoise", "filter", "sampling")
+                 "antialias", "time_limit", "denoise", "filter", "sampling", "sampler")
 #: The methods, for the help text (kept in step with `api.METHODS` by a test).
 METHOD_HELP = ("raycast (ray casting), raster (scan-line, z-buffer), whitted (recursive ray tracing) or path "
                "(path tracing, global illumination)")
@@ -124,7 +124,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--height", type=int, metavar="H", help="image height in pixels")
     render.add_argument("--spp", type=int, metavar="N", help="samples per pixel")
     render.add_argument("--max-depth", type=int, metavar="D", help="bounces after the first hit (whitted: secondary "
-                        "rays, default 5; path: 0 = direct light only, default unbounded)")
+                        "rays, default 5; path: 0 = direct light only, -1 or unset = unbounded)")
     render.add_argument("--antialias", metavar="A", help="none, supersample (spp jittered samples) or adaptive")
     render.add_argument("--seed", type=int, metavar="S", help="random seed")
     render.add_argument("--threads", type=int, metavar="T", help="worker threads (default: all cores)")
@@ -141,6 +141,8 @@ def build_parser() -> argparse.ArgumentParser:
     path.add_argument("--denoise", action="store_const", const=True, help="denoise the final image with Intel Open "
                       "Image Denoise (pip install pyoidn), guided by the albedo and normal AOVs")
     path.add_argument("--filter", metavar="F", help="pixel filter: box (default) or gaussian")
+    path.add_argument("--sampler", metavar="S", help="sobol (default: stratified Owen-scrambled Sobol points) or "
+                      "independent (uniform random numbers)")
     path.add_argument("--sampling", metavar="S", help="direct light by mis (default: light and BSDF sampling, "
                       "multiple importance sampling), light (light sampling only) or bsdf (BSDF sampling only)")
     render.add_argument("--stats", metavar="FILE.json", help="write timings and ray counts as JSON")
@@ -291,7 +293,7 @@ def _summary(stats: dict) -> str:
 
 def _describe(key: str, value: Any) -> str:
     """One readable line for a `scene_info` entry."""
-    if isinstance(value, dict) and key in ("objects", "lights"):
+    if isinstance(value, dict) and key in ("objects", "lights", "emissive_objects"):
         total = sum(value.values())
         parts = ", ".join(f"{kind} {count}" for kind, count in value.items())
         return f"{total} ({parts})" if parts else "0"

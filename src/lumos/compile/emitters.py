@@ -34,6 +34,7 @@ _PART_AREAS = {
     L.SHAPE_CYLINDER: (2.0 * np.pi, np.pi, np.pi),
     L.SHAPE_CONE: (np.pi * np.sqrt(2.0), np.pi),
     L.SHAPE_DISK: (np.pi,),
+    L.SHAPE_RECT: (1.0,),
 }
 
 

@@ -47,6 +47,8 @@ def canonical(obj) -> tuple[int, np.ndarray]:
         return L.SHAPE_DISK, _affine(cols, obj.center)
     if kind == "plane":
         return L.SHAPE_PLANE, _affine(frame(obj.normal), obj.point)
+    if kind == "rect":
+        return L.SHAPE_RECT, rect_canonical(obj.corner, obj.edge_u, obj.edge_v)
     raise ValueError(f"not an analytic shape: {kind}")
 
 

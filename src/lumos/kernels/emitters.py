@@ -43,6 +43,7 @@ from .layout import (
     SHAPE_BOX,
     SHAPE_CONE,
     SHAPE_CYLINDER,
+    SHAPE_RECT,
     SHAPE_SPHERE,
 )
 from .sampling import concentric_disk
@@ -95,6 +96,8 @@ def _canonical_point(kind, part, u1, u2):
         rho = math.sqrt(u1)  # the cone's area element grows with the radius ρ = 1 − z
         k = 1.0 / math.sqrt(2.0)
         return (rho * cp, rho * sp, 1.0 - rho), (cp * k, sp * k, k)
+    if kind == SHAPE_RECT:
+        return (u1, u2, 0.0), (0.0, 0.0, 1.0)
     x, y = concentric_disk(u1, u2)  # caps and disks
     if part == 1:
         return (x, y, 0.0), (0.0, 0.0, -1.0)
@@ -108,7 +111,7 @@ def _part_area(kind, part):
     """Canonical area of a part (as `compile.emitters._PART_AREAS`)."""
     if kind == SHAPE_SPHERE:
         return 4.0 * math.pi
-    if kind == SHAPE_BOX:
+    if kind == SHAPE_BOX or kind == SHAPE_RECT:
         return 1.0
     if part == 0 and kind == SHAPE_CYLINDER:
         return 2.0 * math.pi

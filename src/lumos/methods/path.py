@@ -47,8 +47,9 @@ from ..kernels.camera import camera_ray_at
 from ..kernels.emitters import emitter_pdf, sample_emitter
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
-from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_IOR, MAT_KT, MAT_SHININESS
+from ..kernels.layout import CAM_APERTURE, LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_IOR, MAT_KT, MAT_SHININESS
 from ..kernels.rng import rand_key, sample_key
+from ..kernels.sobol import sobol_2d
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
@@ -63,10 +64,16 @@ MAX_BOUNCES = 1024
 #: Nesting depth of the media a path can be inside (as whitted).
 MAX_MEDIA = 4
 #: Random dimensions: 0–1 position in the pixel, 2–3 lens, 4 shutter time; vertex k uses DIM_PATH + k·DIM_VERTEX
-#: + (0 lobe, 1–2 direction, 3 emitter, 4–5 point on it, 6 roulette).
+#: + (0 lobe, 1 emitter, 2–3 direction, 4–5 point on the emitter, 6 roulette).
 DIM_TIME = 4
 DIM_PATH = 8
 DIM_VERTEX = 8
+#: Dimension pairs drawn from Sobol points (`_draw2`): 0 pixel, 1 lens, then per vertex k PAIR_PATH + k·PAIRS_VERTEX
+#: + (0 lobe and emitter, 1 direction, 2 point on the emitter), for the first two vertices.
+PAIR_PATH = 2
+PAIRS_VERTEX = 3
+SOBOL_PAIRS = PAIR_PATH + 1 * PAIRS_VERTEX
+SAMPLER_INDEPENDENT, SAMPLER_SOBOL = 0, 1
 MODE_MIS, MODE_LIGHT, MODE_BSDF = 0, 1, 2
 _MODES = {"mis": MODE_MIS, "light": MODE_LIGHT, "bsdf": MODE_BSDF}
 FILTER_BOX, FILTER_GAUSSIAN, FILTER_CENTRE = 0, 1, 2
@@ -146,11 +153,13 @@ def _media_update(media_obj, media_ior, n_media, obj, ior, entering):
 
 
 @njit_inline
-def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, key, scratch, background):
+def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pixel_key, spp, sample, key, scratch,
+               background):
     """Radiance along the camera ray (o, d) at shutter time `time`: one path, in the order of the maths.
 
-    Returns (rgb, rays traced, t and object id of the first hit (t = −1 on a miss), albedo and shading normal of
-    the first hit (the denoiser's guides))."""
+    Random numbers: `_draw2(sampler, pixel_key, spp, sample, key, pair, dim)` (see there). Returns (rgb, rays
+    traced, t and object id of the first hit (t = −1 on a miss), albedo and shading normal of the first hit (the
+    denoiser's guides))."""
     stack, stack_t, media_obj, media_ior = scratch
     L0 = L1 = L2 = 0.0
     b0 = b1 = b2 = 1.0  # throughput
@@ -215,11 +224,12 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, key, scratc
             break  # black: nothing leaves
         exponent = mat[MAT_SHININESS]
         dim = DIM_PATH + depth * DIM_VERTEX
+        pair = PAIR_PATH + depth * PAIRS_VERTEX
+        u_lobe, u_pick = _draw2(sampler, pixel_key, spp, sample, key, pair, dim)
         # stage 4: next-event estimation (the smooth lobes only: a mirror or glass cannot meet a light sample)
         if p_d + p_s > 0.0:
-            wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, rand_key(key, dim + 3),
-                                                                  rand_key(key, dim + 4), rand_key(key, dim + 5),
-                                                                  time)
+            ul1, ul2 = _draw2(sampler, pixel_key, spp, sample, key, pair + 2, dim + 4)
+            wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, u_pick, ul1, ul2, time)
             if pdf_light > 0.0 and (delta or mode != MODE_BSDF):
                 cos_i = n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]
                 if cos_i > 0.0 and n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] > 0.0:
@@ -237,9 +247,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, key, scratc
                             L1 += b1 * c1 * w
                             L2 += b2 * c2 * w
         # stage 5: BSDF sampling: the direction the path goes on in, and its weight f·cos/pdf
-        u_lobe = rand_key(key, dim)
-        u1 = rand_key(key, dim + 1)
-        u2 = rand_key(key, dim + 2)
+        u1, u2 = _draw2(sampler, pixel_key, spp, sample, key, pair + 1, dim + 2)
         p_smooth = p_d + p_s
         if u_lobe < p_smooth:
             wi, (w0, w1, w2), pdf = sample_smooth(kd, ks, exponent, p_d, p_s, n_s, wo, u_lobe, u1, u2)
@@ -289,14 +297,23 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, key, scratc
     return (L0, L1, L2), rays, first_t, first_obj, albedo, normal
 
 
+@njit_inline
+def _draw2(sampler, pixel_key, spp, sample, key, pair, dim):
+    """Two random numbers for a pair of dimensions of a sample: padded Owen-scrambled Sobol points
+    (`kernels.sobol`) for the pairs that matter most (the pixel, the lens, the first two vertices: lobe choice
+    and light pick, BSDF direction, point on a light), independent ones (dimensions dim, dim + 1 of the sample's
+    hash `key`) for the rest or with `sampler: independent`."""
+    if sampler == SAMPLER_SOBOL and pair < SOBOL_PAIRS:
+        return sobol_2d(pixel_key, spp, sample, pair)
+    return rand_key(key, dim), rand_key(key, dim + 1)
+
+
 @njit
-def _pixel_point(filter_kind, key, x, y):
-    """The image point of a sample of pixel (x, y): uniform in the pixel (box), drawn from the Gaussian
-    filter around its centre, or the centre itself."""
+def _pixel_point(filter_kind, u1, u2, x, y):
+    """The image point of a sample of pixel (x, y) from (u1, u2): uniform in the pixel (box), drawn from the
+    Gaussian filter around its centre, or the centre itself."""
     if filter_kind == FILTER_CENTRE:
         return x + 0.5, y + 0.5
-    u1 = rand_key(key, 0)
-    u2 = rand_key(key, 1)
     if filter_kind == FILTER_BOX:
         return x + u1, y + u2
     return (x + 0.5 + truncated_gaussian(u1, GAUSSIAN_SIGMA, GAUSSIAN_RADIUS),
@@ -304,8 +321,8 @@ def _pixel_point(filter_kind, key, x, y):
 
 
 @njit_parallel
-def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, seed, max_depth, mode,
-               filter_kind, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row):
+def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, spp, seed, max_depth, mode,
+               sampler, filter_kind, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row):
     """Samples s0 … s1−1 of every pixel of rows y0 … y1−1, added (in sample order) to the float64 buffers:
     sums and sums2 (H, W, 3) of radiance and its square, guides (H, W, 6) of albedo and normal; depth and
     object_id from sample 0."""
@@ -316,16 +333,20 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
         bad = 0
         for x in range(width):
             pixel = y * width + x
+            pixel_key = sample_key(seed, pixel, np.int64(1) << 62)  # the pixel's own hash (no sample is 2^62)
             for s in range(s0, s1):
                 key = sample_key(seed, pixel, s)
-                fx, fy = _pixel_point(filter_kind, key, x, y)
-                o, dr = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, rand_key(key, 2),
-                                      rand_key(key, 3))
+                u1, u2 = _draw2(sampler, pixel_key, spp, s, key, 0, 0)
+                fx, fy = _pixel_point(filter_kind, u1, u2, x, y)
+                lx, ly = 0.5, 0.5
+                if cam_params[CAM_APERTURE] != 0.0:
+                    lx, ly = _draw2(sampler, pixel_key, spp, s, key, 1, 2)
+                o, dr = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
                 tau = cam_time[0]
                 if cam_time[1] > cam_time[0]:
                     tau = cam_time[0] + (cam_time[1] - cam_time[0]) * rand_key(key, DIM_TIME)
-                rgb, n, t, obj, alb, nrm = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth, mode, key,
-                                                      scratch, sa.background)
+                rgb, n, t, obj, alb, nrm = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth, mode, sampler,
+                                                      pixel_key, spp, s, key, scratch, sa.background)
                 rays += n
                 r, g, b = rgb
                 if not (math.isfinite(r) and math.isfinite(g) and math.isfinite(b)):
@@ -385,6 +406,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
     max_depth = settings.resolved_max_depth()
     max_depth = np.int64(-1 if max_depth is None else max_depth)
     mode = np.int64(_MODES[settings.sampling])
+    sampler = np.int64(SAMPLER_SOBOL if settings.sampler == "sobol" else SAMPLER_INDEPENDENT)
     filter_kind = np.int64(FILTER_CENTRE if settings.antialias == "none" else
                            FILTER_GAUSSIAN if settings.filter == "gaussian" else FILTER_BOX)
     seed = np.int64(settings.seed)
@@ -411,8 +433,8 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
             t0 = _time.perf_counter()
             for y0, y1 in bands:
                 _pass_rows(sa, em, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
-                           np.int64(y1), np.int64(done), np.int64(done + n), seed, max_depth, mode, filter_kind,
-                           sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row)
+                           np.int64(y1), np.int64(done), np.int64(done + n), np.int64(spp), seed, max_depth, mode,
+                           sampler, filter_kind, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row)
                 if progress is not None:
                     fraction = (done + n * y1 / height) / spp
                     if settings.time_limit is not None:

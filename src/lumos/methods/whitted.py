@@ -47,6 +47,7 @@ from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.traverse import closest_hit
 from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
+from ..errors import LumosError
 from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
 
 #: Secondary rays whose path weight (largest channel) is below this are not traced.
@@ -392,6 +393,8 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
     cam_time = np.array(camera.shutter, dtype=np.float64)
     sa = compiled.arrays
     seed = np.int64(settings.seed)
+    if settings.resolved_max_depth() is None:
+        raise LumosError("render.max_depth: whitted needs a finite number of bounces (-1, unbounded, is for path)")
     max_depth = np.int64(settings.resolved_max_depth())
     mode = _ANTIALIAS[settings.antialias]
     radiance = np.zeros((height, width, 3), np.float32)

@@ -16,6 +16,7 @@ from .model import (
     Mesh,
     Plane,
     PointLight,
+    Rect,
     RectLight,
     RenderSettings,
     Scene,

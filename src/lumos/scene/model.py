@@ -94,8 +94,9 @@ class RenderSettings(StrictModel):
     width: Annotated[int, Field(ge=1, le=65536)] = 640
     height: Annotated[int, Field(ge=1, le=65536)] = 480
     spp: Annotated[int, Field(ge=1, le=1 << 20)] = 1
-    #: bounces after the first hit; None (unset) is the method's default: 5 for whitted, unbounded for path
-    max_depth: Optional[Annotated[int, Field(ge=0, le=1024)]] = None
+    #: bounces after the first hit; -1 is unbounded (path: roulette ends paths); unset, the method's default:
+    #: 5 for whitted, unbounded for path
+    max_depth: Optional[Annotated[int, Field(ge=-1, le=1024)]] = None
     seed: Annotated[int, Field(ge=0, lt=1 << 32)] = 0
     shading: Literal["flat", "gouraud", "phong"] = "phong"
     exposure: Positive = 1.0
@@ -114,6 +115,8 @@ class RenderSettings(StrictModel):
     # path tracing (method: path)
     #: pixel filter: box (each sample counts for its own pixel) or a Gaussian of standard deviation 0.5 pixel
     filter: Literal["box", "gaussian"] = "box"
+    #: where samples fall: stratified Owen-scrambled Sobol points (lower error at equal spp) or independent ones
+    sampler: Literal["sobol", "independent"] = "sobol"
     #: how direct light is found: multiple importance sampling, or light (emitter) sampling or BSDF sampling alone
     sampling: Literal["mis", "light", "bsdf"] = "mis"
     #: stop after the pass that crosses this many seconds of rendering (the image holds the samples taken so far)
@@ -124,7 +127,7 @@ class RenderSettings(StrictModel):
     def resolved_max_depth(self) -> Optional[int]:
         """`max_depth`, or the method's default when it is unset (None: unbounded)."""
         if self.max_depth is not None:
-            return self.max_depth
+            return None if self.max_depth < 0 else self.max_depth
         return DEFAULT_MAX_DEPTH.get(self.method, 5)
 
     @model_validator(mode="after")
@@ -360,6 +363,23 @@ class Disk(ObjectBase):
     radius: Positive = 1.0
 
 
+class Rect(ObjectBase):
+    """A parallelogram (a rectangle when the edges are perpendicular): the points corner + s·edge_u + t·edge_v,
+    s and t in [0, 1], with (u, v) = (s, t). Two-sided like a disk; its normal is along cross(edge_u, edge_v)
+    (which only matters for bump maps and for raster's back-face culling). Mitsuba's `rectangle`."""
+
+    type: Literal["rect"]
+    corner: Vec3 = (-1.0, 0.0, 1.0)
+    edge_u: Vec3 = (2.0, 0.0, 0.0)
+    edge_v: Vec3 = (0.0, 0.0, -2.0)
+
+    @model_validator(mode="after")
+    def _check(self):
+        if norm(cross(self.edge_u, self.edge_v)) <= 1e-18:
+            raise ValueError("edge_u and edge_v must be non-zero and not parallel")
+        return self
+
+
 class Triangle(ObjectBase):
     type: Literal["triangle"]
     vertices: tuple[Vec3, Vec3, Vec3]
@@ -523,10 +543,10 @@ Solid = Annotated[Union[Sphere, Box, Cylinder, Cone, Mesh, Csg], Field(discrimin
 Csg.model_rebuild()
 
 Object = Annotated[
-    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Triangle, Mesh, Csg],
+    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Rect, Triangle, Mesh, Csg],
     Field(discriminator="type"),
 ]
-OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "triangle", "mesh", "csg")
+OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "rect", "triangle", "mesh", "csg")
 
 # ---------------------------------------------------------------------------------------------------- lights
 
