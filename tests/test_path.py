@@ -322,3 +322,55 @@ def test_cornell_box_agrees_with_a_live_mitsuba():
     diff = ours.array.mean(axis=(0, 1)) - their.mean(axis=(0, 1))
     se = np.sqrt(ours.aovs["variance"].mean(axis=(0, 1)) / (64 * 64) + their.var(axis=(0, 1)) / (64 * 64) / 4)
     assert np.all(np.abs(diff) < 5 * se + 1e-4), (diff, se)
+
+
+@pytest.mark.slow
+def test_denoising_brings_a_16_spp_render_closer_to_the_converged_one():
+    """Where pyoidn is installed: OIDN (with the albedo and normal guides) on the 16-spp Cornell box lowers its
+    error against Mitsuba's converged render, keeps the raw image as the `noisy` AOV, and invents no light."""
+    pytest.importorskip("pyoidn")
+    reference = np.load(MITSUBA_REF / "ref_depth8_256.npy").astype(np.float64)
+    img = lumos.render(CORNELL, spp=16, denoise=True, aov=["noisy", "albedo", "normal"], seed=2)
+    raw = img.aovs["noisy"].astype(np.float64)
+    denoised = img.array.astype(np.float64)
+    rmse = lambda a: float(np.sqrt(np.mean((a - reference) ** 2)))  # noqa: E731
+    assert rmse(denoised) < 0.8 * rmse(raw), (rmse(denoised), rmse(raw))
+    # the surfaces: without the light seen directly and the ring of pixels it partly covers (the light is kept out
+    # of the denoiser, so those keep their coverage noise)
+    light = reference.max(axis=2) > 2.0
+    ring = light.copy()
+    ring[1:] |= light[:-1]
+    ring[:-1] |= light[1:]
+    ring[:, 1:] |= light[:, :-1]
+    ring[:, :-1] |= light[:, 1:]
+    surfaces = ~ring
+    rmse_s = lambda a: float(np.sqrt(np.mean((a - reference)[surfaces] ** 2)))  # noqa: E731
+    assert rmse_s(denoised) < 0.5 * rmse_s(raw), (rmse_s(denoised), rmse_s(raw))
+    assert denoised.min() >= 0.0 and denoised.max() <= 2.0 * raw.max()
+    plain = lumos.render(CORNELL, spp=16, seed=2)
+    np.testing.assert_array_equal(plain.array, img.aovs["noisy"])  # the noisy AOV is the image undenoised
+
+
+@pytest.mark.slow
+def test_thin_lens_and_motion_blur_agree_with_whitted():
+    """Depth of field and motion blur are the camera's and the shutter's, the same in path as in whitted: with a
+    thin lens and a moving sphere under a point light, path's direct light equals whitted's (block z-test)."""
+    scene = {
+        "camera": {"position": [0, 1.0, 5], "look_at": [0, 0.5, 0], "fov": 40, "aperture": 0.15,
+                   "focus_distance": 5.0, "shutter": [0.0, 1.0]},
+        "lights": [{"type": "point", "position": [2, 4, 3], "intensity": 2.0, "attenuation": [0, 0, 0.05]}],
+        "objects": [
+            {"type": "plane", "material": {"kd": 0.6}},
+            {"type": "sphere", "center": [-0.8, 0.5, 0], "radius": 0.5, "motion": [1.2, 0, 0],
+             "material": {"kd": [0.7, 0.3, 0.2]}},
+            {"type": "box", "min": [0.6, 0, -1.5], "max": [1.4, 0.8, -0.7], "material": {"kd": [0.2, 0.4, 0.7]}},
+        ],
+    }
+    w, h = 48, 32
+    p = path(scene, width=w, height=h, spp=256, max_depth=0, aov=["variance"])
+    runs = [lumos.render(scene, method="whitted", width=w, height=h, spp=128, max_depth=0, seed=s).array
+            for s in (1, 2)]
+    wt = 0.5 * (runs[0] + runs[1])
+    var = p.aovs["variance"] + 0.25 * (runs[0] - runs[1]) ** 2
+    z = np.abs(_block_means(p.array - wt)) / np.maximum(np.sqrt(_block_means(var) / 64), 1e-6)
+    assert z.max() < 5.0, z.max()

@@ -62,7 +62,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if args.command in ("render", "sheet"):
             _skip_numba_blas_probe()
         with warnings.catch_warnings():
-            warnings.simplefilter("always", LumosWarning)
+            warnings.simplefilter("default", LumosWarning)  # each message once
             warnings.showwarning = _show_warning
             return args.run(args, started) or 0
     except LumosError as exc:

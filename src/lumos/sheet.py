@@ -50,6 +50,8 @@ BACKGROUND, INK, MUTED, FRAME = (255, 255, 255), (25, 25, 25), (105, 105, 105), 
 WARMUP_SIZE = 8
 #: Shadings of the scan-line method, in the textbook's order: (caption name, `shading` setting).
 RASTER_SHADINGS = (("flat", "flat"), ("Gouraud", "gouraud"), ("Phong", "phong"))
+#: Samples per pixel of the path tracer's cell at least, unless the sheet is given an spp.
+PATH_MIN_SPP = 64
 #: Output formats of a sheet, by extension.
 SHEET_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG"}
 
@@ -147,7 +149,12 @@ def _jobs(scene, entries, settings: dict, max_cell_width: Optional[int]) -> list
         if "method" not in entry:
             raise LumosError(f"sheet: entry {label!r} names no method")
         if entry["method"] in api.METHODS:
-            jobs.append((label, {**size, **settings, **entry}))
+            job = {**size, **settings, **entry}
+            if job["method"] == "path" and settings.get("spp") is None and scene.render.spp < PATH_MIN_SPP:
+                # a scene's spp is meant for anti-aliasing; a path tracer needs samples to show its light
+                job["spp"] = PATH_MIN_SPP
+                label = f"{label} · {PATH_MIN_SPP} spp"
+            jobs.append((label, job))
     if not jobs:
         raise LumosError(f"sheet: no entry uses an available method ({', '.join(api.METHODS)})")
     return jobs

@@ -219,7 +219,7 @@ def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, see
     return (r, g, b), rays
 
 
-@njit
+@njit_inline
 def is_solid(surf, ref):
     """True for hits on closed solids (sphere, box, capped cylinder or cone, csg, mesh solid): shadow and
     refracted rays enter and leave them. Triangles, planes, disks, rects and open cylinders are surfaces."""

@@ -288,9 +288,32 @@ def _planar(o, d, t_min, t_max, kind):
     return (t, 0) if (0.0 <= x <= 1.0 and 0.0 <= y <= 1.0) else (NO_HIT, 0)
 
 
+@njit
+def _planar_world(m, o, d, t_min, t_max, kind):
+    """`_planar` on the world-space ray: the canonical z of the origin and direction first (the plane's
+    distance), the in-plane coordinates only for a hit within (t_min, t_max) — most tests stop before them."""
+    dz = m[2, 0] * d[0] + m[2, 1] * d[1] + m[2, 2] * d[2]
+    if dz == 0.0:
+        return NO_HIT, 0
+    oz = m[2, 0] * o[0] + m[2, 1] * o[1] + m[2, 2] * o[2] + m[2, 3]
+    t = -oz / dz
+    if not (t_min < t < t_max):
+        return NO_HIT, 0
+    if kind == SHAPE_PLANE:
+        return t, 0
+    p = (o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2])
+    x = m[0, 0] * p[0] + m[0, 1] * p[1] + m[0, 2] * p[2] + m[0, 3]
+    y = m[1, 0] * p[0] + m[1, 1] * p[1] + m[1, 2] * p[2] + m[1, 3]
+    if kind == SHAPE_DISK:
+        return (t, 0) if x * x + y * y <= 1.0 else (NO_HIT, 0)
+    return (t, 0) if (0.0 <= x <= 1.0 and 0.0 <= y <= 1.0) else (NO_HIT, 0)
+
+
 @njit_inline
 def intersect_shape(kind, capped, xform, o_world, d_world, t_min, t_max):
     """Intersect an analytic shape given by its kind and object_from_world matrix (3, 4). Returns (t, part)."""
+    if kind == SHAPE_RECT or kind == SHAPE_DISK or kind == SHAPE_PLANE:
+        return _planar_world(xform, o_world, d_world, t_min, t_max, kind)
     o = xform_point(xform, o_world)
     d = xform_vector(xform, d_world)
     if kind == SHAPE_SPHERE:

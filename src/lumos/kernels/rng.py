@@ -49,3 +49,15 @@ def sample_key(seed, pixel, sample):
 def rand_key(key, dim):
     """A uniform float64 in [0, 1) for dimension `dim` of the sample whose `sample_key` is `key`."""
     return float(mix64(key ^ np.uint64(dim)) >> _S11) * _INV_2_53
+
+
+_U32 = np.uint64(0xFFFFFFFF)
+_S32 = np.uint64(32)
+_INV_2_32 = 1.0 / 4294967296.0
+
+
+@njit
+def rand2_key(key, dim):
+    """Two uniform numbers in [0, 1) (32 bits each) from one hash: dimension pair `dim` of the sample `key`."""
+    h = mix64(key ^ np.uint64(dim))
+    return float(h >> _S32) * _INV_2_32, float(h & _U32) * _INV_2_32

@@ -121,7 +121,7 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     return best_t, best_ref, best_b1, best_b2, best_part
 
 
-@njit
+@njit_inline
 def any_hit(geo, o, d, t_min, t_max, stack, time):
     """True if anything lies on the ray with t_min < t < t_max (hit testing; shadow rays use `transmittance`,
     which lets light through transparent objects)."""

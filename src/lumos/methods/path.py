@@ -48,7 +48,7 @@ from ..kernels.emitters import emitter_pdf, sample_emitter
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from ..kernels.layout import CAM_APERTURE, LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_IOR, MAT_KT, MAT_SHININESS
-from ..kernels.rng import rand_key, sample_key
+from ..kernels.rng import rand2_key, rand_key, sample_key
 from ..kernels.sobol import sobol_2d
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
@@ -159,7 +159,8 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
 
     Random numbers: `_draw2(sampler, pixel_key, spp, sample, key, pair, dim)` (see there). Returns (rgb, rays
     traced, t and object id of the first hit (t = −1 on a miss), albedo and shading normal of the first hit (the
-    denoiser's guides))."""
+    denoiser's guides), and the emission of the first hit itself (the light seen directly, which the denoiser
+    leaves alone))."""
     stack, stack_t, media_obj, media_ior = scratch
     L0 = L1 = L2 = 0.0
     b0 = b1 = b2 = 1.0  # throughput
@@ -173,6 +174,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
     first_obj = -1
     albedo = (0.0, 0.0, 0.0)
     normal = (0.0, 0.0, 0.0)
+    e0 = e1 = e2 = 0.0  # the emission of the first hit itself
     depth = 0
     while True:
         # stage 1: the nearest surface along the ray
@@ -203,6 +205,8 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
             L0 += b0 * le0 * w
             L1 += b1 * le1 * w
             L2 += b2 * le2 * w
+            if depth == 0:
+                e0, e1, e2 = le0 * w, le1 * w, le2 * w
         if depth == 0:
             first_t, first_obj = t, obj
         if max_depth >= 0 and depth > max_depth:
@@ -294,7 +298,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
         prev_p = p
         o = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
         d = wi
-    return (L0, L1, L2), rays, first_t, first_obj, albedo, normal
+    return (L0, L1, L2), rays, first_t, first_obj, albedo, normal, (e0, e1, e2)
 
 
 @njit_inline
@@ -302,10 +306,10 @@ def _draw2(sampler, pixel_key, spp, sample, key, pair, dim):
     """Two random numbers for a pair of dimensions of a sample: padded Owen-scrambled Sobol points
     (`kernels.sobol`) for the pairs that matter most (the pixel, the lens, the first two vertices: lobe choice
     and light pick, BSDF direction, point on a light), independent ones (dimensions dim, dim + 1 of the sample's
-    hash `key`) for the rest or with `sampler: independent`."""
+    hash `key`, from one hash) for the rest or with `sampler: independent`."""
     if sampler == SAMPLER_SOBOL and pair < SOBOL_PAIRS:
         return sobol_2d(pixel_key, spp, sample, pair)
-    return rand_key(key, dim), rand_key(key, dim + 1)
+    return rand2_key(key, dim)
 
 
 @njit
@@ -324,7 +328,8 @@ def _pixel_point(filter_kind, u1, u2, x, y):
 def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, spp, seed, max_depth, mode,
                sampler, filter_kind, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row):
     """Samples s0 … s1−1 of every pixel of rows y0 … y1−1, added (in sample order) to the float64 buffers:
-    sums and sums2 (H, W, 3) of radiance and its square, guides (H, W, 6) of albedo and normal; depth and
+    sums and sums2 (H, W, 3) of radiance and its square, guides (H, W, 9) of albedo, normal and the first hit's
+    own emission; depth and
     object_id from sample 0."""
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
@@ -345,7 +350,7 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
                 tau = cam_time[0]
                 if cam_time[1] > cam_time[0]:
                     tau = cam_time[0] + (cam_time[1] - cam_time[0]) * rand_key(key, DIM_TIME)
-                rgb, n, t, obj, alb, nrm = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth, mode, sampler,
+                rgb, n, t, obj, alb, nrm, emits = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth, mode, sampler,
                                                       pixel_key, spp, s, key, scratch, sa.background)
                 rays += n
                 r, g, b = rgb
@@ -361,6 +366,9 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
                 for c in range(3):
                     guides[y, x, c] += alb[c]
                     guides[y, x, 3 + c] += nrm[c]
+                if math.isfinite(emits[0] + emits[1] + emits[2]):
+                    for c in range(3):
+                        guides[y, x, 6 + c] += emits[c]
                 if s == 0 and t >= 0.0:
                     depth[y, x] = t
                     object_id[y, x] = obj
@@ -412,7 +420,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
     seed = np.int64(settings.seed)
     sums = np.zeros((height, width, 3))
     sums2 = np.zeros((height, width, 3))
-    guides = np.zeros((height, width, 6))
+    guides = np.zeros((height, width, 9))
     depth = np.full((height, width), np.inf, np.float32)
     object_id = np.full((height, width), -1, np.int32)
     rays_per_row = np.zeros(height, np.int64)
@@ -459,14 +467,17 @@ def _film(sums, sums2, guides, depth, object_id, n, settings, threads, rays_per_
     """The image and AOVs from the accumulation buffers after n samples per pixel."""
     mean = (sums / n).astype(np.float32)
     albedo = (guides[:, :, :3] / n).astype(np.float32)
-    normal = guides[:, :, 3:] / n
+    normal = guides[:, :, 3:6] / n
     length = np.linalg.norm(normal, axis=2, keepdims=True)
     normal = np.where(length > 0, normal / np.maximum(length, 1e-30), 0.0).astype(np.float32)
     radiance = mean
     if settings.denoise and final:
         from ..denoise import denoise
 
-        radiance = denoise(mean, albedo, normal)
+        # the light seen directly has no noise to remove (only its edges' coverage): it is kept out of the
+        # denoiser, whose network would smear a bright emitter's edges and shift its flat HDR interior
+        emitted = (guides[:, :, 6:9] / n).astype(np.float32)
+        radiance = denoise(np.maximum(mean - emitted, 0.0), albedo, normal) + emitted
     if n > 1:
         variance = np.maximum(sums2 - sums * sums / n, 0.0) / (n * (n - 1.0))
     else:
