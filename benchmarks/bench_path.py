@@ -99,7 +99,7 @@ def lumos_render(spp: int = 64, max_depth: int = MI_DEPTH, width: int = 256, hei
         if _lumos_scene is None:
             _lumos_scene = lumos.load_scene(SCENE)
         scene = _lumos_scene
-    depth = 256 if max_depth < 0 else max_depth - 2  # lumos's largest max_depth stands for unbounded
+    depth = -1 if max_depth < 0 else max_depth - 2  # -1: unbounded in both
     kwargs = dict(method="path", width=width, height=height, max_depth=depth, threads=threads)
     key = (id(scene), depth, width, height, threads)
     if warm and key not in _lumos_warm:

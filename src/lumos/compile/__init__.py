@@ -196,7 +196,7 @@ def compile_scene(scene, settings=None) -> CompiledScene:
         if obj.type in ("triangle", "mesh"):
             if any(obj.motion):
                 raise LumosError(f"objects[{object_id}].motion: {obj.type} objects cannot move (motion blur is "
-                                 "for spheres, boxes, cylinders, cones, disks and csg objects)")
+                                 "for spheres, boxes, cylinders, cones, disks, rects, planes and csg objects)")
             tri_parts.append((*_mesh_triangles(obj, world_from_object), mat, object_id))
             continue
         if obj.type == "csg":

@@ -103,15 +103,17 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
     lk, lv, ls = arrays.light_kind, arrays.light_vecs, arrays.light_scalars
     radius = 0.5 * float(np.linalg.norm(bounds[1] - bounds[0])) if len(bounds) else 1.0
     radius = max(radius, 1e-6)
-    kinds, refs, powers, areas, parts, geoms = [], [], [], [], [], []
+    kinds, refs, powers, areas, slots, parts, geoms = [], [], [], [], [], [], []
 
     def add(kind, ref, power, area=0.0, part=None, geom=None):
         kinds.append(kind)
         refs.append(ref)
         powers.append(max(power, 0.0))
         areas.append(area)
-        parts.append(np.zeros(L.EMIT_PARTS) if part is None else part)
-        geoms.append(np.zeros((4, 4)) if geom is None else geom)
+        slots.append(-1 if geom is None else len(geoms))
+        if geom is not None:  # shapes only: their parts and placement
+            parts.append(np.zeros(L.EMIT_PARTS) if part is None else part)
+            geoms.append(geom)
 
     light_emit = np.full(len(lk), -1, np.int32)
     for j in range(len(lk)):
@@ -126,20 +128,24 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
         else:
             add(L.EMIT_LIGHT, j, np.pi * _mean(lv[j, L.LV_DIFFUSE]) * ls[j, L.LS_AREA])
 
-    # emissive triangles (not those of csg mesh solids: they are tested inside their csg object)
+    # emissive triangles (not those of csg mesh solids: they are tested inside their csg object), vectorised: a
+    # mesh may have millions
     tri_emit = np.full(len(arrays.tri_info), -1, np.int32)
-    tri_in_bvh = np.unique(arrays.prim_ref[arrays.prim_ref >= 0])
-    for t in tri_in_bvh:
-        info = arrays.tri_info[t]
-        le = mats[info[L.INFO_MATERIAL], L.MAT_EMISSION : L.MAT_EMISSION + 3]
-        if info[L.INFO_LIGHT] >= 0 or not np.any(le > 0):
-            continue
-        v = arrays.tri_verts[t].astype(np.float64).reshape(3, 3)
-        area = 0.5 * float(np.linalg.norm(np.cross(v[1] - v[0], v[2] - v[0])))
-        if area <= 0.0:
-            continue
-        tri_emit[t] = len(kinds)
-        add(L.EMIT_TRIANGLE, int(t), np.pi * _mean(le) * area, area)
+    tris = np.arange(int(np.count_nonzero(arrays.prim_ref >= 0)))  # the BVH's triangles come first, in order
+    if len(tris):
+        info = arrays.tri_info[tris]
+        le = mats[info[:, L.INFO_MATERIAL], L.MAT_EMISSION : L.MAT_EMISSION + 3]
+        v = arrays.tri_verts[tris].astype(np.float64).reshape(-1, 3, 3)
+        area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+        keep = (info[:, L.INFO_LIGHT] < 0) & np.any(le > 0, axis=1) & (area > 0)
+        tris, le, area = tris[keep], le[keep], area[keep]
+        first = len(kinds)
+        tri_emit[tris] = np.arange(first, first + len(tris), dtype=np.int32)
+        kinds.extend([L.EMIT_TRIANGLE] * len(tris))
+        refs.extend(tris.tolist())
+        powers.extend((np.pi * le.mean(axis=1) * area).tolist())
+        areas.extend(area.tolist())
+        slots.extend([-1] * len(tris))
 
     # emissive shapes in the BVH (planes are unbounded, csg objects are sampled by BSDF rays only)
     shape_emit = np.full(len(arrays.shape_info), -1, np.int32)
@@ -185,8 +191,9 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
         emit_cdf=np.ascontiguousarray(cdf, np.float64).reshape(n),
         emit_pmf=np.ascontiguousarray(pmf, np.float64).reshape(n),
         emit_area=np.asarray(areas, np.float64).reshape(n),
-        emit_parts=np.asarray(parts, np.float64).reshape(n, L.EMIT_PARTS),
-        emit_geom=np.asarray(geoms, np.float64).reshape(n, 4, 4),
+        emit_slot=np.asarray(slots, np.int32).reshape(n),
+        emit_parts=np.asarray(parts, np.float64).reshape(len(parts), L.EMIT_PARTS),
+        emit_geom=np.asarray(geoms, np.float64).reshape(len(geoms), 4, 4),
         tri_emit=tri_emit,
         shape_emit=shape_emit,
         light_emit=light_emit,

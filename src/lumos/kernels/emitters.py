@@ -126,11 +126,12 @@ def _shape_density(em, surf, e, s, part, n_canonical):
     P(part) / (A_part · J), J = |det M|·|M⁻ᵀ n|; and the world unit normal there."""
     m = surf.shape_xform[s]
     n_w = xform_normal(m, n_canonical)  # M⁻ᵀ n: object_from_world's transpose
-    jac = em.emit_geom[e, 3, 0] * length(n_w)
+    slot = em.emit_slot[e]
+    jac = em.emit_geom[slot, 3, 0] * length(n_w)
     kind = surf.shape_info[s, INFO_KIND]
     if not jac > 0.0:
         return 0.0, (0.0, 0.0, 1.0)
-    return em.emit_parts[e, part] / (_part_area(kind, part) * jac), normalize(n_w)
+    return em.emit_parts[slot, part] / (_part_area(kind, part) * jac), normalize(n_w)
 
 
 @njit_inline
@@ -158,7 +159,7 @@ def sample_emitter(em, lit, surf, p, u_pick, u1, u2, time):
             return wi, dist, mul(row3(vecs, LV_DIFFUSE), f), mul(row3(vecs, LV_SPECULAR), f), pmf, True
         return wi, dist, row3(vecs, LV_DIFFUSE), row3(vecs, LV_SPECULAR), pmf / (math.pi * w), False
     if kind == EMIT_SPHERE:
-        g = em.emit_geom[e]
+        g = em.emit_geom[em.emit_slot[e]]
         wi, dist, solid_angle = sphere_cone((g[3, 0], g[3, 1], g[3, 2]), g[3, 3], p, u1, u2)
         if not solid_angle > 0.0:
             return _NO_SAMPLE
@@ -178,7 +179,7 @@ def sample_emitter(em, lit, surf, p, u_pick, u1, u2, time):
         density = 1.0 / em.emit_area[e]
         mat = np.int64(surf.tri_info[ref, INFO_MATERIAL])
     else:  # EMIT_SHAPE: a part by its probability, then a point uniform over its canonical area
-        row = em.emit_parts[e]
+        row = em.emit_parts[em.emit_slot[e]]
         part = EMIT_PARTS - 1
         acc = 0.0
         for k in range(EMIT_PARTS):
@@ -189,7 +190,7 @@ def sample_emitter(em, lit, surf, p, u_pick, u1, u2, time):
                 break
         kind_s = surf.shape_info[ref, INFO_KIND]
         q, n_c = _canonical_point(kind_s, part, u1, u2)
-        y = xform_point(em.emit_geom[e], q)
+        y = xform_point(em.emit_geom[em.emit_slot[e]], q)
         m = surf.shape_xform[ref]
         if m[3, 3] != 0.0:  # a moving shape
             y = (y[0] + time * m[3, 0], y[1] + time * m[3, 1], y[2] + time * m[3, 2])
@@ -227,7 +228,7 @@ def emitter_pdf(em, lit, surf, e, p, wi, dist, n_geo, ref, part, time):
         cos_y = abs(dot(row3(lit.light_vecs[r], LV_DIRECTION), wi))
         return pmf * dist * dist / (cos_y * sc[LS_AREA]) if cos_y > 0.0 else 0.0
     if kind == EMIT_SPHERE:
-        g = em.emit_geom[e]
+        g = em.emit_geom[em.emit_slot[e]]
         omega = sphere_cone_solid_angle((g[3, 0], g[3, 1], g[3, 2]), g[3, 3], p)
         return pmf / omega if omega > 0.0 else 0.0
     cos_y = abs(dot(n_geo, wi))

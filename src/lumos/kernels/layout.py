@@ -141,9 +141,10 @@ Emitters = namedtuple(
         "emit_cdf",  # float64 (ne,): cumulative selection probability (last entry 1)
         "emit_pmf",  # float64 (ne,): selection probability, proportional to the emitter's power
         "emit_area",  # float64 (ne,): world area (triangles, shapes)
-        "emit_parts",  # float64 (ne, EMIT_PARTS): shapes: probability of each part (face), indexed by part id
-        "emit_geom",  # float64 (ne, 4, 4): shapes: rows 0-2 world_from_canonical, [3, 0] |det| of its linear
-        # part; spheres: [3, :] = centre, radius
+        "emit_slot",  # int32 (ne,): shapes: their row of emit_parts and emit_geom; -1 for lights and triangles
+        "emit_parts",  # float64 (nsh, EMIT_PARTS): per shape, the probability of each part (face), by part id
+        "emit_geom",  # float64 (nsh, 4, 4): per shape, rows 0-2 world_from_canonical and [3, 0] the |det| of
+        # its linear part; spheres: [3, :] = centre, radius
         "tri_emit",  # int32 (nt,): entry of each triangle, -1 if it does not emit
         "shape_emit",  # int32 (ns,): entry of each shape, -1 if it is not sampled
         "light_emit",  # int32 (nl,): entry of each light

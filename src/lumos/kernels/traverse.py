@@ -47,6 +47,15 @@ def _shape_hit(geo, s, o, d, t_min, t_max, time):
 
 
 @njit_inline
+def _triangle_setup_if(geo, d):
+    """The watertight test's per-ray constants, or a stand-in when the scene has no triangles (a division and
+    the axis choice saved per ray)."""
+    if geo.tri_verts.shape[0] == 0:
+        return 0, 1, 2, 0.0, 0.0, 1.0
+    return triangle_setup(d)
+
+
+@njit_inline
 def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     """Nearest intersection with t_min < t < t_max at shutter time `time`; `geo` is a `layout.Geometry`.
 
@@ -69,7 +78,7 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     link = geo.node_link
     if box.shape[0] > 0:
         rb = box_setup(o, d)
-        setup = triangle_setup(d)
+        setup = _triangle_setup_if(geo, d)
         node = np.int64(0)  # int64 throughout: a literal 0 or an int32 link would each compile another variant
         sp = 0
         active = intersect_node_box(box, node, rb, best_t) != NO_HIT
@@ -203,7 +212,7 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
     if box.shape[0] == 0:
         return (tr, tg, tb), True
     rb = box_setup(o, d)
-    setup = triangle_setup(d)
+    setup = _triangle_setup_if(geo, d)
     node = np.int64(0)
     if intersect_node_box(box, node, rb, t_max) == NO_HIT:
         return (tr, tg, tb), True
