@@ -26,6 +26,7 @@ METHODS: dict[str, str] = {
     "raster": "lumos.methods.raster:render_raster",
     "whitted": "lumos.methods.whitted:render_whitted",
     "path": "lumos.methods.path:render_path",
+    "radiosity": "lumos.methods.radiosity:render_radiosity",
 }
 
 _SETTING_KEYS = tuple(RenderSettings.model_fields)
@@ -45,7 +46,13 @@ def resolve_settings(scene: Scene, overrides: dict[str, Any]) -> RenderSettings:
     if unknown:
         raise LumosError(f"render(): unknown setting {unknown[0]!r} (known: {', '.join(_SETTING_KEYS)})")
     merged = scene.render.model_dump()
-    merged.update({k: v for k, v in overrides.items() if v is not None})
+    for key, value in overrides.items():
+        if value is None:
+            continue
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):  # a nested block: override its keys
+            merged[key] = {**merged[key], **{k: v for k, v in value.items() if v is not None}}
+        else:
+            merged[key] = value
     try:
         settings = RenderSettings.model_validate(merged)
     except ValidationError as exc:
@@ -86,14 +93,15 @@ def _entry_point(name: str) -> Callable:
 
 
 def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] = False,
-           on_pass: Optional[Callable[["Image"], None]] = None, **settings) -> "Image":
+           on_pass: Optional[Callable[["Image"], None]] = None, solution=None, **settings) -> "Image":
     """Render `scene` (a Scene, a dict or a path) and return an `Image`.
 
     `settings` override the scene's `render:` block: method, width, height, spp, max_depth, seed, shading,
     exposure, threads, aov, and the path tracer's time_limit, filter, sampling and denoise. `progress=True` shows
     a progress bar on stderr for renders that take over about a second (and says so when the kernels are being
     compiled, on a first run); a callable receives the finished fraction instead. `on_pass(image)` (method path)
-    receives the image after each pass of samples, e.g. to write checkpoints.
+    receives the image after each pass of samples, e.g. to write checkpoints. `solution` (method radiosity): a
+    `lumos.radiosity.Solution` or the path of a saved one, drawn without solving again.
 
     `stats` holds the timings: load_s, build_s (flatten + BVH), render_s and total_s, and jit_s, the time
     Numba spent compiling kernels (a first run only), which build_s and render_s exclude.
@@ -129,6 +137,10 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
         t_build = time.perf_counter()
         jit_build = watch.seconds
         kwargs = {}
+        if solution is not None:
+            if cfg.method != "radiosity":
+                raise LumosError(f"solution: a radiosity solution is drawn by method radiosity, not {cfg.method}")
+            kwargs["solution"] = solution
         if on_pass is not None and cfg.method == "path":
             kwargs["on_pass"] = lambda film: on_pass(Image(film.radiance, aovs=film.aovs, exposure=cfg.exposure,
                                                            stats=dict(film.extra)))

@@ -33,6 +33,8 @@ class CompiledScene:
     object_names: list = field(default_factory=list)
     raster: Optional["RasterMesh"] = None  # the polygons, for method raster
     emitters: Optional[L.Emitters] = None  # the lights and emissive primitives, for method path
+    patches: Optional[object] = None  # radiosity.patches.Patches, for method radiosity
+    digest: str = ""  # radiosity: the fingerprint of the geometry and materials a solution depends on
 
 
 class _Materials:
@@ -213,6 +215,14 @@ def compile_scene(scene, settings=None) -> CompiledScene:
     for kind, m, mat, i in emitters:
         shapes.add(kind, m, mat, len(scene.objects) + i, light=i)
     compiled = _assemble(scene, materials, shapes, tri_parts, lights, names)
+    if settings is not None and settings.method == "radiosity":
+        from ..radiosity.patches import default_patch_size, mesh_scene, usable_bounds
+        from ..radiosity.solve import scene_digest
+
+        rs = settings.radiosity
+        size = rs.patch_size if rs.patch_size is not None else default_patch_size(*usable_bounds(compiled.bounds))
+        compiled.patches = mesh_scene(scene, compiled.bounds, size, settings.tessellation)
+        compiled.digest = scene_digest(scene)
     if settings is not None and settings.method == "path":
         from .emitters import build_emitters, physical_materials
 
@@ -321,6 +331,20 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
     return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names)
 
 
+def triangle_arrays(tri_verts: np.ndarray, tri_ids: np.ndarray) -> CompiledScene:
+    """A compiled "scene" of bare triangles, for ray queries against geometry that is not a scene (radiosity's
+    patches): tri_verts float (m, 9) world-space corners, tri_ids int (m,) stored as each triangle's object id
+    (`tri_info[:, INFO_OBJECT]`, in the BVH's triangle order); no lights, one black material."""
+    from types import SimpleNamespace
+
+    materials = _Materials()
+    materials.emitter((0.0, 0.0, 0.0))
+    lights = (np.zeros(0, np.int32), np.zeros(0, np.int32), np.zeros((0, 6, 3)), np.zeros((0, 5)))
+    stand_in = SimpleNamespace(ambient=(0.0, 0.0, 0.0), background=(0.0, 0.0, 0.0))
+    parts = [(np.asarray(tri_verts, np.float64), None, None, 0, np.asarray(tri_ids, np.int32))]
+    return _assemble(stand_in, materials, _Shapes(), parts, lights, [])
+
+
 def _concat_triangles(parts):
     if not parts:
         return (np.zeros((0, 9), np.float32), np.zeros((0, 9), np.float32), np.zeros((0, 6), np.float32),
@@ -333,6 +357,7 @@ def _concat_triangles(parts):
         uvs.append(np.zeros((m, 6), np.float32) if uv is None else uv.astype(np.float32))
         flags = (L.FLAG_NORMALS if n is not None else 0) | (L.FLAG_UVS if uv is not None else 0)
         info = np.empty((m, 5), np.int32)
-        info[:] = (0, mat, obj, flags, -1)
+        info[:] = (0, mat, 0, flags, -1)
+        info[:, L.INFO_OBJECT] = obj  # one object id, or one per triangle
         infos.append(info)
     return np.concatenate(verts), np.concatenate(normals), np.concatenate(uvs), np.concatenate(infos)

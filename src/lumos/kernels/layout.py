@@ -150,5 +150,21 @@ Emitters = namedtuple(
         "light_emit",  # int32 (nl,): entry of each light
     ],
 )
+#: Radiosity's patches (`radiosity.patches`), as the solvers' kernels read them (`kernels.radiosity`).
+PatchArrays = namedtuple(
+    "PatchArrays",
+    [
+        "corners",  # float64 (n, 4, 3): corners counter-clockwise about the patch's normal (row 3 unused for k=3)
+        "k",  # int32 (n,): 3 or 4 corners
+        "centre",  # float64 (n, 3)
+        "normal",  # float64 (n, 3): unit, the way the patch faces
+        "area",  # float64 (n,)
+        "rho",  # float64 (n, 3): reflectance
+        "emission",  # float64 (n, 3): Le
+        "poly",  # int32 (n,): the polygon the patch is a side of (ray hits report polygons)
+        "side_patch",  # int32 (npoly, 2): patch of each polygon's front and back side, -1 where none
+        "poly_normal",  # float64 (npoly, 3): unit normal of each polygon's front side
+    ],
+)
 #: What texture lookups read (kernels.texture).
 Textures = namedtuple("Textures", ["tex_info", "tex_pixels"])

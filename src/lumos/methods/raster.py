@@ -283,3 +283,80 @@ def render_raster(compiled, camera, settings, progress=None) -> Film:
                 "samples": np.full((height, width), len(offsets), np.int32)}
     aovs = {name: all_aovs[name] for name in settings.aov}
     return Film(radiance, aovs, rays + int(rays_per_row.sum()), threads)
+
+
+# -------------------------------------------------------------------- drawing precomputed colours (radiosity)
+
+
+@njit_parallel
+def _shade_colours(ids, gbuf, prim_colour, shading, background, weight, accum, aovs, cam_vecs, ortho, depth,
+                   normal, albedo, object_id, prim_albedo, prim_object):
+    """One pass over the G-buffer (position, normal, colour): adds weight × the interpolated colour (Gouraud) or
+    the polygon's colour (flat) to `accum`; with `aovs`, fills the AOV buffers."""
+    height, width = ids.shape
+    for y in prange(height):
+        for x in range(width):
+            prim = ids[y, x]
+            if prim < 0:
+                for c in range(3):
+                    accum[y, x, c] += weight * background[c]
+                continue
+            for c in range(3):
+                v = prim_colour[prim, c] if shading == FLAT else np.float64(gbuf[y, x, G_COLOUR + c])
+                accum[y, x, c] += weight * v
+            if aovs:
+                p = (np.float64(gbuf[y, x, 0]), np.float64(gbuf[y, x, 1]), np.float64(gbuf[y, x, 2]))
+                if ortho:
+                    depth[y, x] = ((cam_vecs[0, 0] - p[0]) * cam_vecs[3, 0] + (cam_vecs[0, 1] - p[1]) * cam_vecs[3, 1]
+                                   + (cam_vecs[0, 2] - p[2]) * cam_vecs[3, 2])
+                else:
+                    dx, dy, dz = cam_vecs[0, 0] - p[0], cam_vecs[0, 1] - p[1], cam_vecs[0, 2] - p[2]
+                    depth[y, x] = np.sqrt(dx * dx + dy * dy + dz * dz)
+                for c in range(3):
+                    normal[y, x, c] = gbuf[y, x, G_NORMAL + c]
+                    albedo[y, x, c] = prim_albedo[prim, c]
+                object_id[y, x] = prim_object[prim]
+
+
+def draw_colours(positions, normals, faces, vertex_colour, face_colour, face_albedo, face_object, camera, settings,
+                 background, progress=None) -> Film:
+    """Scan-convert one-sided triangles that carry their own colours (a radiosity solution's display mesh):
+    Gouraud interpolates `vertex_colour` (nv, 3), flat shows `face_colour` (nf, 3) per triangle; back faces are
+    culled (each side of a surface that is seen has its own triangles). Anti-aliasing as `render_raster`."""
+    width, height = settings.width, settings.height
+    check_memory(width, height, bytes_per_pixel=96)
+    threads = set_threads(settings.threads)
+    nf = len(faces)
+    centroid = positions[faces].mean(axis=1) if nf else np.zeros((0, 3))
+    e1 = positions[faces[:, 1]] - positions[faces[:, 0]] if nf else np.zeros((0, 3))
+    e2 = positions[faces[:, 2]] - positions[faces[:, 0]] if nf else np.zeros((0, 3))
+    fn = np.cross(e1, e2)
+    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+    from ..compile.raster import RasterMesh
+
+    mesh = RasterMesh(positions=positions, normals=normals, uvs=np.zeros((len(positions), 2)),
+                      prim_start=np.arange(0, 3 * nf + 1, 3, dtype=np.int64),
+                      prim_index=np.ascontiguousarray(faces.ravel(), np.int32),
+                      prim_info=np.zeros((nf, 3), np.int32), prim_point=centroid, prim_normal=fn)
+    attrs = np.empty((len(positions), 9))
+    attrs[:, G_POS:G_POS + 3] = positions
+    attrs[:, G_NORMAL:G_NORMAL + 3] = normals
+    attrs[:, G_COLOUR:G_COLOUR + 3] = vertex_colour
+    raster = Rasterizer(mesh, attrs, camera, width, height, cull=True, persp=settings.perspective_correct)
+    cam_vecs, _ = camera_arrays(camera)
+    radiance = np.zeros((height, width, 3), np.float32)
+    want_aovs = bool(settings.aov)
+    depth, normal, albedo, object_id = allocate_aovs(height, width) if want_aovs else allocate_aovs(1, 1)
+    offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
+    shading = FLAT if settings.radiosity.display == "flat" else GOURAUD
+    for s, (jx, jy) in enumerate(offsets):
+        zbuf, ids, gbuf = raster.draw(jx, jy)
+        _shade_colours(ids, gbuf, np.ascontiguousarray(face_colour, np.float64), np.int64(shading),
+                       np.asarray(background, np.float64), 1.0 / len(offsets), radiance, want_aovs and s == 0,
+                       cam_vecs, camera.type == "orthographic", depth, normal, albedo, object_id,
+                       np.ascontiguousarray(face_albedo, np.float64), np.ascontiguousarray(face_object, np.int32))
+        if progress is not None:
+            progress((s + 1) / len(offsets))
+    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
+                "samples": np.full((height, width), len(offsets), np.int32)}
+    return Film(radiance, {name: all_aovs[name] for name in settings.aov if name in all_aovs}, 0, threads)

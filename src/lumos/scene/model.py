@@ -84,7 +84,37 @@ AOV_NAMES = ("depth", "normal", "albedo", "object_id", "samples", "variance", "n
 #: AOVs only the path tracer makes: the variance of each pixel's mean, and the image before denoising.
 PATH_AOVS = ("variance", "noisy")
 #: `max_depth` of each method when the scene and the flags leave it unset (None: unbounded, roulette ends paths).
-DEFAULT_MAX_DEPTH = {"whitted": 5, "path": None}
+DEFAULT_MAX_DEPTH = {"whitted": 5, "path": None, "radiosity": 5}
+
+
+class RadiositySettings(StrictModel):
+    """The `render.radiosity` block: how method radiosity meshes, computes form factors, solves and displays."""
+
+    #: gauss_seidel and jacobi store the full form-factor matrix; progressive shoots from the patch with the
+    #: most unshot power (no matrix); stochastic shoots power by random rays (Monte Carlo); auto: progressive
+    #: up to 20,000 patches, stochastic beyond
+    solver: Literal["auto", "gauss_seidel", "jacobi", "progressive", "stochastic"] = "auto"
+    #: raycast: Lambert's contour formula with shadow-ray visibility; hemicube: an item buffer per patch
+    form_factors: Literal["hemicube", "raycast"] = "raycast"
+    hemicube_resolution: Annotated[int, Field(ge=8, le=4096)] = 128
+    #: shadow rays per ray-cast form factor (and per patch for the direct light of point and directional lights)
+    visibility_samples: Annotated[int, Field(ge=1, le=1024)] = 8
+    #: largest patch edge in world units (default: 1/24 of the scene's bounds' diagonal)
+    patch_size: Optional[Positive] = None
+    #: adaptive refinement: split patches whose radiance differs from a neighbour's by more than the threshold
+    #: (relative), down to `subdivide_levels` levels
+    subdivide: bool = False
+    subdivide_threshold: Positive = 0.1
+    subdivide_levels: Annotated[int, Field(ge=1, le=8)] = 2
+    #: stop when the unshot power (progressive, stochastic) or the largest change of a sweep (gauss_seidel,
+    #: jacobi), relative to the light sent out, falls below this
+    tolerance: Annotated[float, Field(gt=0, lt=1)] = 0.01
+    #: at most this many shots (progressive), sweeps (gauss_seidel, jacobi) or iterations (stochastic)
+    max_iterations: Optional[Annotated[int, Field(ge=1)]] = None
+    #: stochastic: rays per iteration (default: 100 per patch)
+    rays: Optional[Annotated[int, Field(ge=1)]] = None
+    #: gouraud: radiance averaged to the vertices and interpolated; flat: each patch its own colour
+    display: Literal["gouraud", "flat"] = "gouraud"
 
 
 class RenderSettings(StrictModel):
@@ -123,6 +153,8 @@ class RenderSettings(StrictModel):
     time_limit: Optional[Positive] = None
     #: run Intel Open Image Denoise on the final image (needs the optional `pyoidn`)
     denoise: bool = False
+    # radiosity (method: radiosity)
+    radiosity: RadiositySettings = Field(default_factory=RadiositySettings)
 
     def resolved_max_depth(self) -> Optional[int]:
         """`max_depth`, or the method's default when it is unset (None: unbounded)."""

@@ -1,0 +1,90 @@
+"""Radiosity: the diffuse light of a scene solved once for its surfaces, then drawn from any camera by the
+scan-line renderer with Gouraud interpolation (the chapter's two halves joined).
+
+    L_i = E_i + ρ_i · Σ_j F_ij · L_j           (the radiosity equation over the patches; B = π·L)
+
+The solution (`lumos.radiosity`: meshing into patches, form factors, four solvers) depends only on the
+geometry, materials and lights, not on the camera: `lumos radiosity solve` saves it, and `render(...,
+solution=...)` draws a new view of it without solving again. Patch radiance is averaged to the patches'
+corners and interpolated across them (`display: gouraud`), or each patch is shown in its own colour
+(`display: flat`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import LumosError
+from .common import Film
+from .raster import draw_colours
+
+
+def render_radiosity(compiled, camera, settings, progress=None, solution=None) -> Film:
+    """Solve (or take `solution`: a `radiosity.Solution` or the path of a saved one) and draw it from `camera`."""
+    from ..radiosity.solution import Solution
+    from ..radiosity.solve import solve_compiled
+
+    if solution is None:
+        solution = solve_compiled(compiled, settings)
+    elif isinstance(solution, (str, Path)):
+        solution = Solution.load(solution, compiled.digest)
+    elif solution.scene_digest and compiled.digest and solution.scene_digest != compiled.digest:
+        raise LumosError("radiosity: the solution was solved for another scene (its geometry, materials or lights "
+                         "differ); solve this one again")
+    if np.any(solution.element_optics[:, :6] > 0.0):
+        film = _two_pass(solution, camera, settings, compiled.arrays.background, progress)
+    else:
+        face = solution.face_element
+        film = draw_colours(solution.vertices, solution.vertex_normal, solution.faces, solution.vertex_radiance,
+                            solution.element_radiance[face], solution.element_reflectance[face],
+                            solution.element_object[face], camera, settings, compiled.arrays.background, progress)
+    film.extra = {"radiosity": dict(solution.stats)}
+    return film
+
+
+def _two_pass(solution, camera, settings, background, progress) -> Film:
+    """Mirrors and glass: camera rays traced through them into the solution (`kernels.radiosity.trace_two_pass`).
+    What it captures: the view-dependent reflections and refractions of the diffuse solution, seen from the eye.
+    What it does not: light that mirrors and glass send onto diffuse surfaces (caustics; the solution treats
+    them by their kd alone), and glossy (ks) highlights."""
+    from ..compile import triangle_arrays
+    from ..compile.camera import camera_arrays
+    from ..kernels.radiosity import trace_two_pass
+    from .common import check_memory, set_threads
+
+    width, height = settings.width, settings.height
+    if settings.antialias == "adaptive":
+        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; radiosity takes none or "
+                         "supersample")
+    check_memory(width, height)
+    threads = set_threads(settings.threads)
+    faces = solution.faces
+    bvh = triangle_arrays(solution.vertices[faces].reshape(-1, 9), np.arange(len(faces), dtype=np.int32))
+    from ..kernels.layout import INFO_OBJECT
+
+    tri_face = np.ascontiguousarray(bvh.arrays.tri_info[:, INFO_OBJECT])
+    n = solution.n_elements
+    face0 = np.full(n, -1, np.int32)
+    face1 = np.full(n, -1, np.int32)
+    order = np.argsort(solution.face_element, kind="stable")
+    fe = solution.face_element[order]
+    first = np.searchsorted(fe, np.arange(n), side="left")
+    count = np.searchsorted(fe, np.arange(n), side="right") - first
+    face0[count > 0] = order[first[count > 0]]
+    two = count > 1
+    face1[two] = order[first[two] + 1]
+    cam_vecs, cam_params = camera_arrays(camera)
+    spp = 1 if settings.antialias == "none" else settings.spp
+    depth = settings.resolved_max_depth()
+    out = np.zeros((height, width, 3))
+    rays = np.zeros(height, np.int64)
+    trace_two_pass(bvh.arrays, tri_face, np.ascontiguousarray(faces), solution.face_element, face0, face1,
+                   solution.vertices, solution.vertex_radiance, solution.element_normal, solution.element_optics,
+                   solution.element_twin, cam_vecs, cam_params, np.int64(width), np.int64(height), np.int64(spp),
+                   np.int64(settings.seed), np.int64(5 if depth is None else depth),
+                   np.asarray(background, np.float64), out, rays)
+    if progress is not None:
+        progress(1.0)
+    return Film(out.astype(np.float32), {}, int(rays.sum()), threads, primary_rays=width * height * spp)

@@ -1,0 +1,405 @@
+"""Meshing a scene into patches: every surface as planar triangles and quads no larger than `patch_size`.
+
+    patches = mesh_scene(scene, patch_size=0.1, segments=48)
+
+- meshes and triangles: their triangles (after the mesh keys' fix-ups), each cut into k² triangles of edge at
+  most `patch_size` (a barycentric grid);
+- boxes, rects and planes: quads cut into a grid of cells at most `patch_size` on a side; a plane is clipped
+  to the rectangle that covers the rest of the scene's bounds (10% larger), since an infinite floor has no
+  finite patches;
+- spheres, cylinders, cones and disks: the scan-line renderer's tessellation (`compile.tessellate`) at
+  `segments`, then cut like meshes;
+- area lights: their emitting shapes, tessellated the same way, emitting their radiance on the lit side.
+
+**Sides.** Light may reach either side of an open surface (a wall, a disk, a triangle, a mesh), so each side of
+its polygons is a patch of its own, facing its own way; a closed solid (sphere, box, capped cylinder or cone, a
+watertight consistently wound mesh) has its outside, and its inside too only when a light or the camera is
+inside it (a room built as a box). A side that is not a patch (the inside of a solid, the back of a one-sided
+light) still blocks light. The polygons (`polys`) are the geometry, shared by both
+sides; `side_patch` maps each polygon's front (the side its normal points to) and back to a patch.
+
+**Materials, read as radiosity reads them.** ρ = kd (scaled down, as the path tracer does, when kd + ks + kr +
+kt exceeds 1); ks, kr and kt take no part in the diffuse solution (the display traces mirrors and glass in a
+second pass); emission is emitted on every side that is a patch. Textures are not read: a textured material
+takes part with its own kd (a warning says so).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import LumosError
+from ..kernels import layout as L
+
+#: A plane is clipped to the scene's bounds grown by this fraction on each side.
+PLANE_MARGIN = 0.1
+#: Cosine of the largest angle between face normals that the display still smooths across.
+SMOOTH_COS = math.cos(math.radians(35.0))
+
+
+@dataclass
+class Patches:
+    """The geometry (polygons, shared by their two sides) and the patches (one per side that receives light)."""
+
+    vertices: np.ndarray  # float64 (nv, 3)
+    polys: np.ndarray  # int32 (npoly, 4): corners counter-clockwise about poly_normal; column 3 = -1: a triangle
+    poly_normal: np.ndarray  # float64 (npoly, 3) unit, the front side's normal
+    side_patch: np.ndarray  # int32 (npoly, 2): patch of the front side and of the back side, -1 where none
+    patch_poly: np.ndarray  # int32 (n,): the polygon each patch is a side of
+    patch_side: np.ndarray  # int8 (n,): +1 front, -1 back
+    area: np.ndarray  # float64 (n,)
+    centre: np.ndarray  # float64 (n, 3)
+    normal: np.ndarray  # float64 (n, 3): unit, the way the patch faces
+    reflectance: np.ndarray  # float64 (n, 3)
+    emission: np.ndarray  # float64 (n, 3)
+    object_id: np.ndarray  # int32 (n,)
+    material: np.ndarray  # int32 (n,)
+    smooth_group: np.ndarray  # int32 (n,): patches of one surface the display may smooth across (object, material)
+    optics: np.ndarray  # float64 (n, 9): kr (3), kt (3), ior, fresnel (1/0), and 1 for a solid's outside, -1 for
+    # its inside, 0 for an open surface: what the two-pass display needs to trace mirrors and glass
+
+    @property
+    def n(self) -> int:
+        return int(len(self.area))
+
+    def corners(self, i: int) -> np.ndarray:
+        """float64 (3 or 4, 3): patch i's corners, counter-clockwise about its own normal."""
+        idx = self.polys[self.patch_poly[i]]
+        idx = idx[idx >= 0]
+        return self.vertices[idx if self.patch_side[i] > 0 else idx[::-1]]
+
+
+class _Builder:
+    def __init__(self):
+        self.vertices: list[np.ndarray] = []
+        self.polys: list[np.ndarray] = []
+        self.count = 0
+        self.meta: list[tuple] = []  # per polygon: (front?, back?, reflectance, emission, object, material, group,
+        # optics)
+        self.optics = np.zeros(8)  # of the object being added (set by mesh_scene)
+
+    def add(self, verts: np.ndarray, polys: np.ndarray, front: bool, back: bool, rho, le, object_id: int,
+            material: int, group: int, solid: bool = False) -> None:
+        """Polygons (m, 3 or 4) over `verts` (k, 3), counter-clockwise about their front normal."""
+        if len(polys) == 0:
+            return
+        polys = np.asarray(polys, np.int64)
+        if polys.shape[1] == 3:
+            polys = np.concatenate([polys, np.full((len(polys), 1), -1)], axis=1)
+        out = np.where(polys >= 0, polys + self.count, -1)
+        self.vertices.append(np.asarray(verts, np.float64))
+        self.polys.append(out.astype(np.int32))
+        self.count += len(verts)
+        self.meta.append((len(polys), front, back, np.asarray(rho, np.float64), np.asarray(le, np.float64),
+                          object_id, material, group, self.optics, solid))
+
+
+def _grid_quads(corner, eu, ev, patch_size):
+    """A parallelogram corner + s·eu + t·ev cut into nu × nv cells no larger than patch_size."""
+    nu = max(1, int(math.ceil(np.linalg.norm(eu) / patch_size - 1e-9)))
+    nv = max(1, int(math.ceil(np.linalg.norm(ev) / patch_size - 1e-9)))
+    s = np.linspace(0.0, 1.0, nu + 1)
+    t = np.linspace(0.0, 1.0, nv + 1)
+    S, T = np.meshgrid(s, t, indexing="ij")
+    verts = corner + S.reshape(-1, 1) * eu + T.reshape(-1, 1) * ev
+    idx = np.arange((nu + 1) * (nv + 1)).reshape(nu + 1, nv + 1)
+    quads = np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], axis=-1).reshape(-1, 4)
+    return verts, quads
+
+
+def _split_triangles(verts, tris, patch_size):
+    """Each triangle cut into k² triangles (a barycentric grid, k from its longest edge); vertices on shared
+    edges are not merged (the patches of neighbouring triangles meet edge to edge all the same)."""
+    out_v, out_t = [], []
+    base = 0
+    tris = np.asarray(tris, np.int64)
+    a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
+    longest = np.max(np.stack([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
+                               np.linalg.norm(a - c, axis=1)]), axis=0)
+    ks = np.maximum(1, np.ceil(longest / patch_size - 1e-9)).astype(np.int64)
+    if np.all(ks == 1):
+        return verts, tris
+    for k in np.unique(ks):
+        sel = np.nonzero(ks == k)[0]
+        # the grid's barycentric points (i, j) with i + j <= k, and its k² small triangles
+        pts = [(i, j) for i in range(k + 1) for j in range(k + 1 - i)]
+        index = {p: n for n, p in enumerate(pts)}
+        small = []
+        for i in range(k):
+            for j in range(k - i):
+                small.append((index[(i, j)], index[(i + 1, j)], index[(i, j + 1)]))
+                if i + j < k - 1:
+                    small.append((index[(i + 1, j)], index[(i + 1, j + 1)], index[(i, j + 1)]))
+        w = np.array(pts, np.float64) / k  # weights of b and c
+        small = np.array(small, np.int64)
+        for t in sel:
+            p = a[t] + w[:, 0:1] * (b[t] - a[t]) + w[:, 1:2] * (c[t] - a[t])
+            out_v.append(p)
+            out_t.append(small + base)
+            base += len(p)
+    keep = np.nonzero(ks == 1)[0]
+    if len(keep):
+        out_v.append(verts[tris[keep]].reshape(-1, 3))
+        out_t.append(np.arange(3 * len(keep)).reshape(-1, 3) + base)
+    return np.concatenate(out_v), np.concatenate(out_t)
+
+
+def _box_faces(world_from_canonical):
+    """The six faces of the canonical cube [0, 1]³ placed by the matrix: (corner, edge_u, edge_v) each,
+    counter-clockwise about the outward normal (flipped under a mirroring matrix)."""
+    m = world_from_canonical
+    P = lambda x, y, z: m[:3, :3] @ np.array([x, y, z], np.float64) + m[:3, 3]  # noqa: E731
+    ex, ey, ez = m[:3, 0], m[:3, 1], m[:3, 2]
+    faces = [(P(0, 0, 0), ez, ey), (P(1, 0, 0), ey, ez),  # x = 0 (normal -x), x = 1 (+x)
+             (P(0, 0, 0), ex, ez), (P(0, 1, 0), ez, ex),  # y = 0, y = 1
+             (P(0, 0, 0), ey, ex), (P(0, 0, 1), ex, ey)]  # z = 0, z = 1
+    if np.linalg.det(m[:3, :3]) < 0:
+        faces = [(c, v, u) for c, u, v in faces]
+    return faces
+
+
+def _plane_rect(world_from_canonical, lo, hi):
+    """The rectangle of the plane that covers the box [lo, hi] seen along the plane's normal: (corner, eu, ev)."""
+    m = world_from_canonical
+    e1, e2 = m[:3, 0] / np.linalg.norm(m[:3, 0]), m[:3, 1] / np.linalg.norm(m[:3, 1])
+    origin = m[:3, 3]
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    a, b = (corners - origin) @ e1, (corners - origin) @ e2
+    (a0, a1), (b0, b1) = (a.min(), a.max()), (b.min(), b.max())
+    return origin + a0 * e1 + b0 * e2, (a1 - a0) * e1, (b1 - b0) * e2
+
+
+def _closed_and_outward(verts, tris) -> bool:
+    """A mesh that bounds a volume with its faces wound outward (so only its outside needs patches)."""
+    try:
+        import trimesh
+
+        m = trimesh.Trimesh(verts, tris, process=True)
+        return bool(m.is_watertight and m.is_winding_consistent and m.volume > 0)
+    except Exception:  # noqa: BLE001  (an odd mesh: treat it as open, both sides)
+        return False
+
+
+def _inside_canonical(kind: int, q: np.ndarray) -> np.ndarray:
+    """Which canonical points q (m, 3) are inside the canonical solid `kind`."""
+    x, y, z = q[:, 0], q[:, 1], q[:, 2]
+    if kind == L.SHAPE_SPHERE:
+        return x * x + y * y + z * z < 1.0
+    if kind == L.SHAPE_BOX:
+        return np.all((q > 0.0) & (q < 1.0), axis=1)
+    if kind == L.SHAPE_CYLINDER:
+        return (x * x + y * y < 1.0) & (z > 0.0) & (z < 1.0)
+    if kind == L.SHAPE_CONE:
+        return (x * x + y * y < (1.0 - z) ** 2) & (z > 0.0) & (z < 1.0)
+    return np.zeros(len(q), bool)
+
+
+def _points_inside_solid(kind, world_from_canonical, points) -> bool:
+    if not len(points):
+        return False
+    inv = np.linalg.inv(world_from_canonical)
+    q = points @ inv[:3, :3].T + inv[:3, 3]
+    return bool(np.any(_inside_canonical(kind, q)))
+
+
+def _points_inside_mesh(verts, tris, points) -> bool:
+    if not len(points):
+        return False
+    try:
+        import trimesh
+
+        return bool(np.any(trimesh.Trimesh(verts, tris, process=False).contains(points)))
+    except Exception:  # noqa: BLE001  (no answer: give it an inside, which is never wrong, only costlier)
+        return True
+
+
+def _viewpoints(scene, exclude: int) -> np.ndarray:
+    """Points from which light or the eye may be inside a solid: the camera, point lights, the centres of area
+    lights and of emissive objects (other than object `exclude`)."""
+    pts = [np.asarray(scene.camera.position, np.float64)]
+    for light in scene.lights:
+        if light.type == "point":
+            pts.append(np.asarray(light.position, np.float64))
+        elif light.type == "area":
+            if light.shape == "rect":
+                pts.append(np.asarray(light.corner) + 0.5 * np.asarray(light.edge_u) + 0.5 * np.asarray(light.edge_v))
+            else:
+                pts.append(np.asarray(light.center, np.float64))
+    for i, obj in enumerate(scene.objects):
+        if i != exclude and any(c > 0 for c in scene.material_of(obj).emission):
+            for key in ("center", "base", "point", "corner"):
+                if hasattr(obj, key):
+                    pts.append(np.asarray(getattr(obj, key), np.float64))
+                    break
+    return np.array(pts, np.float64).reshape(-1, 3)
+
+
+def usable_bounds(bounds) -> tuple[np.ndarray, np.ndarray]:
+    """The compile step's bounds of everything bounded (planes excluded), or a unit box around the origin for a
+    scene of planes alone."""
+    lo, hi = (np.asarray(b, np.float64) for b in bounds)
+    if not np.all(np.isfinite([lo, hi])) or np.all(hi - lo <= 0):
+        lo, hi = np.full(3, -1.0), np.full(3, 1.0)
+    return lo, hi
+
+
+def default_patch_size(lo, hi) -> float:
+    """A patch size for a scene that gives no `patch_size`: 1/24 of its bounds' diagonal."""
+    return max(float(np.linalg.norm(hi - lo)) / 24.0, 1e-6)
+
+
+def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
+    """Patches of every object and area light of a validated `Scene` (see the module doc); `bounds` (2, 3) are
+    the compile step's (`CompiledScene.bounds`), to which planes are clipped."""
+    import warnings
+
+    from ..compile.meshprep import prepare_mesh
+    from ..compile.shapes import canonical, frame
+    from ..compile.tessellate import tessellate_shape
+    from ..errors import LumosWarning
+
+    lo, hi = usable_bounds(bounds)
+    if patch_size is None:
+        patch_size = default_patch_size(lo, hi)
+    grow = PLANE_MARGIN * np.maximum(hi - lo, 1e-6)
+    plane_lo, plane_hi = lo - grow, hi + grow
+    b = _Builder()
+    mat_index: dict[int, int] = {}
+    textured = set()
+
+    def material_row(obj) -> tuple[int, np.ndarray, np.ndarray]:
+        mat = scene.material_of(obj)
+        key = id(mat)
+        if key not in mat_index:
+            mat_index[key] = len(mat_index)
+        if mat.texture is not None and key not in textured:
+            textured.add(key)
+            warnings.warn("radiosity does not read textures: a textured material takes part with its kd",
+                          LumosWarning, stacklevel=3)
+        kd = np.asarray(mat.kd, np.float64)
+        total = kd + np.asarray(mat.ks) + np.asarray(mat.kr) + np.asarray(mat.kt)
+        if total.max() > 1.0:
+            kd = kd / total.max()
+        return mat_index[key], kd, np.asarray(mat.emission, np.float64)
+
+    for object_id, obj in enumerate(scene.objects):
+        if obj.type == "csg":
+            raise LumosError(f"objects[{object_id}]: radiosity cannot mesh csg objects into patches yet; render "
+                             "them with path, whitted or raycast")
+        mat, rho, le = material_row(obj)
+        material = scene.material_of(obj)
+        b.optics = np.array([*material.kr, *material.kt, material.ior, 1.0 if material.fresnel else 0.0])
+        clear = any(c > 0 for c in material.kt)  # a transparent solid: rays inside it meet its inside
+        group = object_id
+        world = None if obj.transform is None else obj.transform.to_matrix()
+        if obj.type in ("mesh", "triangle"):
+            m = prepare_mesh(obj, world)
+            tris = np.asarray(m.polygons, np.int64)
+            closed = obj.type == "mesh" and _closed_and_outward(m.vertices, tris)
+            inner = not closed or clear or _points_inside_mesh(m.vertices, tris, _viewpoints(scene, object_id))
+            v, t = _split_triangles(m.vertices, tris, patch_size)
+            b.add(v, t, True, inner, rho, le, object_id, mat, group, closed)
+            continue
+        kind, object_from_canonical = canonical(obj)
+        w = object_from_canonical if world is None else world @ object_from_canonical
+        if kind == L.SHAPE_BOX:
+            inner = clear or _points_inside_solid(kind, w, _viewpoints(scene, object_id))
+            for corner, eu, ev in _box_faces(w):
+                v, q = _grid_quads(corner, eu, ev, patch_size)
+                b.add(v, q, True, inner, rho, le, object_id, mat, group, True)
+        elif kind == L.SHAPE_RECT:
+            v, q = _grid_quads(w[:3, 3], w[:3, 0], w[:3, 1], patch_size)
+            b.add(v, q, True, True, rho, le, object_id, mat, group)
+        elif kind == L.SHAPE_PLANE:
+            corner, eu, ev = _plane_rect(w, plane_lo, plane_hi)
+            if np.dot(np.cross(eu, ev), w[:3, 2]) < 0:
+                eu, ev = ev, eu
+            v, q = _grid_quads(corner, eu, ev, patch_size)
+            b.add(v, q, True, True, rho, le, object_id, mat, group)
+        else:
+            capped = getattr(obj, "capped", True)
+            closed = kind == L.SHAPE_SPHERE or (kind in (L.SHAPE_CYLINDER, L.SHAPE_CONE) and capped)
+            inner = not closed or clear or _points_inside_solid(kind, w, _viewpoints(scene, object_id))
+            t = tessellate_shape(kind, w, segments, capped)
+            v, tris = _split_triangles(t.vertices, t.faces, patch_size)
+            b.add(v, tris, True, inner, rho, le, object_id, mat, group, closed)
+    # area lights: their emitting shapes, lit side only (the other side of a rect or disk blocks light)
+    n_objects = len(scene.objects)
+    b.optics = np.zeros(8)
+    for i, light in enumerate(scene.lights):
+        if light.type != "area":
+            continue
+        le = np.asarray(light.radiance, np.float64)
+        zero = np.zeros(3)
+        group = n_objects + i
+        if light.shape == "rect":
+            v, q = _grid_quads(np.asarray(light.corner, float), np.asarray(light.edge_u, float),
+                               np.asarray(light.edge_v, float), patch_size)
+            b.add(v, q, True, False, zero, le, n_objects + i, -1, group)
+            continue
+        if light.shape == "disk":
+            f = frame(light.normal)
+            m = np.eye(4)
+            m[:3, :3] = np.column_stack([f[:, 0] * light.radius, f[:, 1] * light.radius, f[:, 2]])
+            m[:3, 3] = light.center
+            t = tessellate_shape(L.SHAPE_DISK, m, segments)
+        else:
+            m = np.eye(4)
+            m[:3, :3] *= light.radius
+            m[:3, 3] = light.center
+            t = tessellate_shape(L.SHAPE_SPHERE, m, segments)
+        v, tris = _split_triangles(t.vertices, t.faces, patch_size)
+        b.add(v, tris, True, False, zero, le, n_objects + i, -1, group)
+    return _assemble(b)
+
+
+def _assemble(b: _Builder) -> Patches:
+    if not b.polys:
+        raise LumosError("radiosity: the scene has no surfaces to mesh into patches")
+    vertices = np.concatenate(b.vertices)
+    polys = np.concatenate(b.polys)
+    p = vertices[np.maximum(polys, 0)]  # (npoly, 4, 3); a triangle repeats corner 0 in slot 3
+    tri = polys[:, 3] < 0
+    p[tri, 3] = p[tri, 0]
+    # area and normal of a planar polygon: half the cross product of its diagonals (exact for triangles and
+    # planar quads)
+    cross = 0.5 * np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
+    cross[tri] = 0.5 * np.cross(p[tri, 1] - p[tri, 0], p[tri, 2] - p[tri, 0])
+    area = np.linalg.norm(cross, axis=1)
+    good = area > 1e-300
+    normal = np.divide(cross, np.maximum(area, 1e-300)[:, None])
+    centre = np.where(tri[:, None], p[:, :3].mean(axis=1), p.mean(axis=1))
+    side_patch = np.full((len(polys), 2), -1, np.int32)
+    cols = {k: [] for k in ("poly", "side", "rho", "le", "obj", "mat", "group", "optics")}
+    start = 0
+    n = 0
+    for count, front, back, rho, le, obj, mat, group, opt, solid in b.meta:
+        for side, wanted in ((0, front), (1, back)):
+            if not wanted:
+                continue
+            idx = np.arange(start, start + count)
+            idx = idx[good[idx]]
+            side_patch[idx, side] = np.arange(n, n + len(idx))
+            n += len(idx)
+            cols["poly"].append(idx)
+            cols["side"].append(np.full(len(idx), 1 if side == 0 else -1, np.int8))
+            cols["rho"].append(np.broadcast_to(rho, (len(idx), 3)))
+            cols["le"].append(np.broadcast_to(le, (len(idx), 3)))
+            cols["obj"].append(np.full(len(idx), obj, np.int32))
+            cols["mat"].append(np.full(len(idx), mat, np.int32))
+            cols["group"].append(np.full(len(idx), 2 * group + side, np.int32))
+            kind = 0.0 if not solid else (1.0 if side == 0 else -1.0)
+            cols["optics"].append(np.broadcast_to(np.append(opt, kind), (len(idx), 9)))
+        start += count
+    patch_poly = np.concatenate(cols["poly"]).astype(np.int32)
+    side = np.concatenate(cols["side"])
+    return Patches(
+        vertices=vertices, polys=polys, poly_normal=normal, side_patch=side_patch, patch_poly=patch_poly,
+        patch_side=side, area=area[patch_poly], centre=centre[patch_poly],
+        normal=normal[patch_poly] * side[:, None], reflectance=np.ascontiguousarray(np.concatenate(cols["rho"])),
+        emission=np.ascontiguousarray(np.concatenate(cols["le"])), object_id=np.concatenate(cols["obj"]),
+        material=np.concatenate(cols["mat"]), smooth_group=np.concatenate(cols["group"]),
+        optics=np.ascontiguousarray(np.concatenate(cols["optics"])))

@@ -1,0 +1,146 @@
+"""Solving the radiosity equation for a scene: mesh it into patches, light them, iterate to a solution.
+
+    solution = solve(scene, settings)            # settings: a RenderSettings (its `radiosity` block)
+
+    L_i = E_i + ρ_i · Σ_j F_ij · L_j             E_i = Le_i + (the light of point and directional lights)
+
+Stages: (1) patches (`radiosity.patches`) and a BVH over them for visibility; (2) E: what each patch sends
+before any interreflection: its own emission plus, for point and directional lights, the first bounce computed
+analytically with shadow rays (DESIGN.md §3's units, so the result agrees with path and whitted); (3) one of
+four solvers (`radiosity.solvers`); (4) the display mesh: radiance averaged to the patches' corners.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from typing import Callable, Optional
+
+import numpy as np
+
+from ..errors import LumosError
+from ..kernels import layout as L
+from .patches import Patches
+from .solution import Solution
+
+
+def patch_arrays(p: Patches) -> L.PatchArrays:
+    """The patches as the kernels read them: corners in each patch's own (counter-clockwise) order."""
+    n = p.n
+    idx = p.polys[p.patch_poly]  # (n, 4)
+    k = np.where(idx[:, 3] >= 0, 4, 3).astype(np.int32)
+    corners = np.zeros((n, 4, 3))
+    tri = k == 3
+    fwd = p.patch_side > 0
+    order = np.where(fwd[:, None], np.arange(4), np.array([3, 2, 1, 0]))  # quads: reversed for the back side
+    order[tri] = np.where(fwd[tri, None], np.array([0, 1, 2, 3]), np.array([2, 1, 0, 3]))
+    picked = np.take_along_axis(idx, order, axis=1)
+    corners[:] = p.vertices[np.maximum(picked, 0)]
+    return L.PatchArrays(
+        corners=corners, k=k, centre=np.ascontiguousarray(p.centre), normal=np.ascontiguousarray(p.normal),
+        area=np.ascontiguousarray(p.area), rho=np.ascontiguousarray(p.reflectance, np.float64),
+        emission=np.ascontiguousarray(p.emission, np.float64), poly=np.ascontiguousarray(p.patch_poly),
+        side_patch=np.ascontiguousarray(p.side_patch), poly_normal=np.ascontiguousarray(p.poly_normal))
+
+
+def patch_bvh(p: Patches):
+    """A compiled scene of the patches' polygons as triangles (quads split in two), each carrying its polygon
+    as object id: what visibility and shooting rays traverse. Returns (CompiledScene, tri_poly int32 (m,))."""
+    from ..compile import triangle_arrays
+
+    polys = p.polys
+    quad = polys[:, 3] >= 0
+    a = np.concatenate([polys[:, [0, 1, 2]], polys[quad][:, [0, 2, 3]]])
+    owner = np.concatenate([np.arange(len(polys)), np.nonzero(quad)[0]]).astype(np.int32)
+    verts = p.vertices[a].reshape(-1, 9)
+    compiled = triangle_arrays(verts, owner)
+    tri_poly = np.ascontiguousarray(compiled.arrays.tri_info[:, L.INFO_OBJECT])
+    return compiled, tri_poly
+
+
+def scene_digest(scene) -> str:
+    """A fingerprint of what a solution depends on: the objects, lights and materials (not the camera, the
+    image size or the display settings, so a saved solution renders any view)."""
+    data = scene.model_dump(mode="json", exclude={"camera", "render"}, warnings=False)
+    for obj in data.get("objects", []):  # inline mesh arrays: hash their bytes
+        for key in ("vertices", "faces", "normals", "uvs"):
+            if isinstance(obj.get(key), (list, tuple)) and len(obj[key]) > 64:
+                obj[key] = hashlib.sha1(np.asarray(obj[key]).tobytes()).hexdigest()
+    return hashlib.sha1(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def solve(scene, settings, progress: Optional[Callable[[float], None]] = None,
+          say: Optional[Callable[[str], None]] = None) -> Solution:
+    """The radiosity solution of `scene` (a Scene, a dict or a path) with the `radiosity` block of `settings`
+    (a RenderSettings; default: the scene's own `render:` block)."""
+    from ..compile import compile_scene
+    from ..scene.loader import load_scene
+
+    scene = load_scene(scene)
+    settings = scene.render if settings is None else settings
+    settings = settings.model_copy(update={"method": "radiosity"})
+    return solve_compiled(compile_scene(scene, settings), settings, progress, say)
+
+
+def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
+    """`solve` on a scene compiled for method radiosity (`CompiledScene.patches`)."""
+    from ..kernels.radiosity import direct_light
+    from . import solvers
+
+    rs = settings.radiosity
+    t0 = time.perf_counter()
+    patches = compiled.patches
+    pa = patch_arrays(patches)
+    bvh, tri_poly = patch_bvh(patches)
+    t_mesh = time.perf_counter()
+
+    # E: emission, and the first bounce of the point and directional lights
+    first = np.zeros((patches.n, 3))
+    chunks = -(-patches.n // 256)
+    rays = np.zeros(chunks, np.int64)
+    if np.any(compiled.arrays.light_kind <= L.LIGHT_DIRECTIONAL):
+        direct_light(bvh.arrays, compiled.arrays, pa, np.int64(rs.visibility_samples), np.int64(settings.seed),
+                     first, rays)
+    sent = pa.emission + first
+    if not np.any(sent > 0):
+        raise LumosError("radiosity: nothing in the scene emits light (no area light, emissive object, point or "
+                         "directional light reaches a surface)")
+    t_light = time.perf_counter()
+    result = solvers.run(rs, pa, bvh, tri_poly, sent, settings.seed, progress, say)
+    t_solve = time.perf_counter()
+    stats = {
+        "patches": int(patches.n), "polygons": int(len(patches.polys)), "bvh_s": t_mesh - t0,
+        "direct_s": t_light - t_mesh, "form_factor_s": result.form_factor_s,
+        "solve_s": t_solve - t_light - result.form_factor_s, "iterations": int(result.iterations),
+        "residual": float(result.residual), "rays": int(rays.sum()) + int(result.rays),
+        "solver": solvers.chosen(rs, patches.n),
+        "form_factors": rs.form_factors,
+    }
+    return build_solution(patches, pa, result.radiance, rs.model_dump(), stats, compiled.digest)
+
+
+def _twins(p: Patches) -> np.ndarray:
+    """The patch on the other side of each patch's polygon, -1 where that side is not a patch."""
+    other = p.side_patch[p.patch_poly, np.where(p.patch_side > 0, 1, 0)]
+    return np.ascontiguousarray(other, np.int32)
+
+
+def build_solution(patches: Patches, pa: L.PatchArrays, radiance: np.ndarray, settings: dict, stats: dict,
+                   digest: str) -> Solution:
+    """The Solution: the patches with their radiance, and the display mesh (radiance averaged to corners)."""
+    from .display import display_mesh
+
+    vertices, normals, values, faces, face_element = display_mesh(patches, pa, radiance)
+    n = patches.n
+    element_vertices = pa.corners.reshape(-1, 3)
+    element_polys = np.arange(4 * n, dtype=np.int32).reshape(n, 4)
+    element_polys[pa.k == 3, 3] = -1
+    return Solution(
+        element_vertices=element_vertices, element_polys=element_polys, element_normal=pa.normal.copy(),
+        element_area=pa.area.copy(), element_reflectance=pa.rho.copy(), element_emission=pa.emission.copy(),
+        element_radiance=np.asarray(radiance, np.float64), element_object=patches.object_id.astype(np.int32),
+        element_material=patches.material.astype(np.int32), element_patch=np.arange(n, dtype=np.int32),
+        element_optics=np.ascontiguousarray(patches.optics, np.float64), element_twin=_twins(patches),
+        vertices=vertices, vertex_normal=normals, vertex_radiance=values, faces=faces, face_element=face_element,
+        settings=settings, stats=stats, scene_digest=digest)

@@ -1,0 +1,252 @@
+"""The four radiosity solvers, one function each, over the same patches (`layout.PatchArrays`) and the same E.
+
+    L = E + ρ·F·L          (per patch and channel; F_ij the form factor from patch i to patch j)
+
+- **gauss_seidel** and **jacobi** (gathering): the whole matrix F first (ray-cast or hemicube form factors),
+  then sweeps; Jacobi computes every patch from the previous iterate, Gauss–Seidel uses each new value at once
+  (it converges about twice as fast). They stop when a sweep changes no patch by more than `tolerance` times
+  the mean radiance of the surfaces. Only for scenes whose matrix fits in memory.
+- **progressive** refinement (Cohen, Chen, Wallace & Greenberg 1988): shoot the unshot light of the patch with
+  the most unshot power (ΔL·A) to every other patch, form factors computed on the fly and forgotten; stop when
+  the unshot power is below `tolerance` of the power sent out. Until then the display adds Cohen's ambient term
+  (the unshot power spread evenly, times 1/(1 − mean ρ)).
+- **stochastic** (Monte Carlo) radiosity: stochastic Jacobi iterations (Neumann et al. 1995; Bekaert's
+  RenderPark): each iteration sends the unshot power of every patch by random rays (as many as its share of
+  the power), the surfaces they hit keep ρ of it as their next unshot power; its error falls as 1/√rays.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import LumosError
+
+#: solver: auto takes progressive refinement up to this many patches, stochastic radiosity beyond.
+AUTO_PROGRESSIVE_MAX = 20_000
+#: Full-matrix solvers refuse scenes whose float32 matrix would take more than this share of free memory.
+MATRIX_MEMORY_SHARE = 0.5
+#: Progressive: a receiver whose share of a shot, unoccluded, would stay below this fraction of the scene's
+#: brightest emitter takes one shadow ray for its visibility instead of `visibility_samples` (skipping it would
+#: lose light: small shooters of a finely meshed scene are each below any fixed threshold, not in sum).
+SHOT_THRESHOLD = 1e-5
+#: Progressive: patches shot together in one pass over the receivers (fewer passes, the same light), those
+#: with at least this share of the brightest one's unshot power.
+SHOT_BATCH = 16
+SHOT_BATCH_SHARE = 0.5
+#: Stochastic: chunks of rays (each with its own accumulation buffer, summed in order: thread-count
+#: independence), and the rays per patch of an iteration unless `rays` is given.
+STOCHASTIC_CHUNKS = 16
+RAYS_PER_PATCH = 100
+
+
+@dataclass
+class Result:
+    radiance: np.ndarray  # float64 (n, 3)
+    iterations: int
+    residual: float  # unshot power / power sent (progressive, stochastic); last sweep's largest change over the
+    # mean radiance (gauss_seidel, jacobi)
+    rays: int
+    form_factor_s: float
+
+
+def _lum(x: np.ndarray) -> np.ndarray:
+    return x.mean(axis=-1)
+
+
+def chosen(rs, n: int) -> str:
+    """The solver `rs.solver` names, with auto resolved for n patches."""
+    if rs.solver != "auto":
+        return rs.solver
+    return "progressive" if n <= AUTO_PROGRESSIVE_MAX else "stochastic"
+
+
+def run(rs, pa, bvh, tri_poly, sent, seed, progress=None, say=None) -> Result:
+    rs = rs.model_copy(update={"solver": chosen(rs, len(pa.area))})
+    solver = {"gauss_seidel": gathering, "jacobi": gathering, "progressive": progressive,
+              "stochastic": stochastic}[rs.solver]
+    return solver(rs, pa, bvh, tri_poly, sent, int(seed), progress, say)
+
+
+# ------------------------------------------------------------------------------------------------ gathering
+
+
+def matrix_limit() -> int:
+    """The most patches whose float32 form-factor matrix fits in MATRIX_MEMORY_SHARE of the free memory."""
+    from ..methods.common import _available_memory
+
+    avail = _available_memory() or (8 << 30)
+    return int(np.sqrt(MATRIX_MEMORY_SHARE * avail / 4))
+
+
+def form_factor_matrix(rs, pa, bvh, seed) -> tuple[np.ndarray, int]:
+    """F float32 (n, n) by the chosen method, and the rays it traced."""
+    n = len(pa.area)
+    limit = matrix_limit()
+    if n > limit:
+        raise LumosError(f"radiosity.solver: {rs.solver} stores the {n:,}×{n:,} form-factor matrix "
+                         f"({4 * n * n / 2**30:.1f} GiB), more than this machine can hold (at most {limit:,} "
+                         "patches here); use solver: progressive or stochastic, which store no matrix")
+    F = np.zeros((n, n), np.float32)
+    if rs.form_factors == "hemicube":
+        from .formfactors import hemicube_matrix
+
+        hemicube_matrix(pa, rs.hemicube_resolution, seed, F)
+        return F, 0
+    from ..kernels.radiosity import ff_rows_raycast
+
+    band = max(1, min(n, (1 << 20) // max(n, 1)))  # rows per kernel call: about a million form factors
+    rays = 0
+    for start in range(0, n, band):
+        rows = np.arange(start, min(n, start + band), dtype=np.int64)
+        counts = np.zeros(len(rows), np.int64)
+        ff_rows_raycast(bvh.arrays, pa, rows, np.int64(rs.visibility_samples), np.int64(seed), F[start:start + len(rows)],
+                        counts)
+        rays += int(counts.sum())
+    return F, rays
+
+
+def gathering(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
+    from ..kernels.radiosity import gauss_seidel_sweep, jacobi_sweep
+
+    t0 = time.perf_counter()
+    F, rays = form_factor_matrix(rs, pa, bvh, seed)
+    ff_s = time.perf_counter() - t0
+    radiance = sent.copy()
+    limit = rs.max_iterations or 1000
+    change = np.inf
+    it = 0
+    nxt = np.empty_like(radiance)
+    while it < limit:
+        it += 1
+        if rs.solver == "gauss_seidel":
+            change = gauss_seidel_sweep(F, pa.rho, sent, radiance)
+        else:
+            jacobi_sweep(F, pa.rho, sent, radiance, nxt)
+            change = float(np.abs(nxt - radiance).mean(axis=1).max())
+            radiance, nxt = nxt, radiance
+        # relative to the mean radiance of the surfaces (not to the brightest emitter, which would stop the
+        # sweeps while the walls are still percents away)
+        scale = max(float((_lum(radiance) * pa.area).sum() / pa.area.sum()), 1e-300)
+        if say is not None:
+            say(f"sweep {it}: largest change {change / scale:.2e} of the mean radiance")
+        if progress is not None:
+            progress(min(1.0, np.log(max(change / scale, 1e-30)) / np.log(rs.tolerance)) if change > 0 else 1.0)
+        if change <= rs.tolerance * scale:
+            break
+    return Result(radiance, it, change / scale, rays, ff_s)
+
+
+# ---------------------------------------------------------------------------------------------- progressive
+
+
+def progressive(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
+    """Shoot from the brightest unshot patch until the unshot power is below `tolerance` of the power sent."""
+    from ..kernels.radiosity import shoot_raycast
+
+    radiance = sent.copy()
+    unshot = sent.copy()
+    area = pa.area
+    total = float((_lum(sent) * area).sum())
+    threshold = SHOT_THRESHOLD * float(_lum(sent).max())
+    limit = rs.max_iterations or 50 * len(area) + 100
+    chunks = -(-len(area) // 256)
+    rays = np.zeros(chunks, np.int64)
+    hemi = None
+    if rs.form_factors == "hemicube":
+        from .formfactors import HemicubeShooter
+
+        hemi = HemicubeShooter(pa, rs.hemicube_resolution, seed)
+    ff_s = 0.0
+    shots = 0
+    residual = 1.0
+    next_report = 0.0
+    while shots < limit:
+        power = _lum(unshot) * area
+        residual = float(power.sum()) / total
+        if residual <= rs.tolerance:
+            break
+        # the brightest unshot patches, shot together: SHOT_BATCH of them, or fewer once they are dim (a batch
+        # does not see its own members' light until the next one, so it holds only the near-brightest)
+        m = min(SHOT_BATCH, len(area), limit - shots)
+        top = np.argpartition(power, -m)[-m:] if m < len(area) else np.arange(len(area))
+        top = top[np.argsort(-power[top], kind="stable")]
+        top = top[power[top] >= SHOT_BATCH_SHARE * power[top[0]]].astype(np.int64)
+        d = unshot[top].copy()
+        unshot[top] = 0.0
+        t0 = time.perf_counter()
+        if hemi is not None:
+            for q, j in enumerate(top):
+                hemi.shoot(int(j), d[q], shots + q, radiance, unshot)
+        else:
+            shoot_raycast(bvh.arrays, pa, top, d, np.int64(rs.visibility_samples), np.int64(seed), np.int64(shots),
+                          threshold, radiance, unshot, rays)
+        ff_s += time.perf_counter() - t0
+        shots += len(top)
+        if progress is not None:
+            progress(min(1.0, np.log(max(residual, 1e-30)) / np.log(rs.tolerance)))
+        if say is not None and time.perf_counter() >= next_report:
+            say(f"shot {shots}: unshot power {residual:.2%} of what was sent")
+            next_report = time.perf_counter() + 1.0
+    residual = float((_lum(unshot) * area).sum()) / total
+    radiance = radiance + ambient_term(pa, unshot)
+    return Result(radiance, shots, residual, int(rays.sum()), ff_s)
+
+
+def ambient_term(pa, unshot: np.ndarray) -> np.ndarray:
+    """Cohen et al. 1988's ambient correction for a progressive solution not yet converged: the unshot
+    radiance, area-averaged, bounced by the mean reflectance ρ̄ forever (1/(1 − ρ̄)), reflected by each patch."""
+    area = pa.area
+    mean_unshot = (unshot * area[:, None]).sum(axis=0) / area.sum()
+    rho_bar = (pa.rho * area[:, None]).sum(axis=0) / area.sum()
+    return pa.rho * (mean_unshot / np.maximum(1.0 - rho_bar, 1e-3))
+
+
+# ----------------------------------------------------------------------------------------------- stochastic
+
+
+def stochastic(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
+    """Stochastic Jacobi: iterations of random-ray shooting of all the unshot power at once."""
+    from ..kernels.radiosity import shoot_stochastic
+
+    n = len(pa.area)
+    area = pa.area
+    radiance = sent.copy()
+    unshot = sent.copy()
+    total = float((_lum(sent) * area).sum())
+    per_iteration = rs.rays or RAYS_PER_PATCH * n
+    limit = rs.max_iterations or 64
+    received = np.zeros((STOCHASTIC_CHUNKS, n, 3))
+    counts_out = np.zeros(STOCHASTIC_CHUNKS, np.int64)
+    rays = 0
+    it = 0
+    residual = 1.0
+    while it < limit:
+        power = _lum(unshot) * area
+        residual = float(power.sum()) / total
+        if residual <= rs.tolerance:
+            break
+        # rays in proportion to each patch's unshot power (at least one for every patch that has any)
+        share = power / power.sum()
+        counts = np.floor(share * per_iteration).astype(np.int64)
+        counts[(counts == 0) & (power > 0)] = 1
+        shooters = np.nonzero(counts)[0].astype(np.int64)
+        counts = counts[shooters]
+        first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+        ray_power = np.pi * area[shooters, None] * unshot[shooters] / counts[:, None]
+        received[:] = 0.0
+        shoot_stochastic(bvh.arrays, pa, tri_poly, shooters, counts, first, ray_power, np.int64(seed), np.int64(it),
+                         np.int64(STOCHASTIC_CHUNKS), received, counts_out)
+        rays += int(counts_out.sum())
+        gained = received.sum(axis=0) / (np.pi * area[:, None])  # power → radiance of the receiving patch
+        unshot = gained
+        radiance = radiance + gained
+        it += 1
+        if say is not None:
+            say(f"iteration {it}: {int(counts_out.sum()):,} rays, unshot power {residual:.2%} of what was sent")
+        if progress is not None:
+            progress(min(1.0, np.log(max(residual, 1e-30)) / np.log(rs.tolerance)))
+    residual = float((_lum(unshot) * area).sum()) / total
+    return Result(radiance, it, residual, rays, 0.0)
