@@ -343,3 +343,23 @@ def test_cli_solve_saves_and_exports_and_render_draws_the_solution(tmp_path, cap
     assert code == 2 and "--solution" in capsys.readouterr().err
     code = cli.main(["radiosity", "solve", CORNELL, "--export", str(tmp_path / "box.obj")])
     assert code == 2 and ".ply or .glb" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_adaptive_subdivision_refines_where_the_radiance_varies():
+    """Refining the elements of a coarse Cornell box where neighbours differ brings it closer to the converged
+    path-traced image; the patches still shoot as one (elements map to the patches they refine)."""
+    from pathlib import Path
+
+    ref = np.load(Path(__file__).parent / "data" / "cornell_mitsuba" / "ref_depthinf_256.npy").astype(np.float64)
+    errors = {}
+    for subdivide in (False, True):
+        sol = solve(CORNELL, settings(patch_size=0.25, subdivide=subdivide, subdivide_levels=2))
+        img = lumos.render(CORNELL, method="radiosity", solution=sol, spp=4)
+        ours, theirs = _blocks(img.array.astype(np.float64)), _blocks(ref)
+        lit = theirs > 1e-3
+        errors[subdivide] = np.mean(np.abs(ours - theirs)[lit] / theirs[lit])
+        if subdivide:
+            assert sol.n_elements > sol.stats["patches"]
+            assert sol.element_patch.max() == sol.stats["patches"] - 1
+    assert errors[True] < 0.8 * errors[False], errors

@@ -87,53 +87,54 @@ def direct_light(sa, lights_sa, pa, samples, seed, out, rays_out):
 
 
 @njit_inline
-def _gather_ff(geo, pa, i, j, x, n_i, samples, key, stack, scratch):
-    """F_ij with occlusion: the contour form factor from i's (lifted) centre x to patch j times the visibility of
-    j from x; (F, rays). 0 when j's sending side faces away from x."""
-    cj = pa.centre[j]
-    nj = (pa.normal[j, 0], pa.normal[j, 1], pa.normal[j, 2])
+def _gather_ff(geo, src, j, x, n_i, samples, key, stack, scratch):
+    """F from the (lifted) receiver point x with normal n_i to shooting patch j of `src`, with occlusion: the
+    contour form factor times the visibility of j from x; (F, rays). 0 when j's sending side faces away."""
+    cj = src.centre[j]
+    nj = (src.normal[j, 0], src.normal[j, 1], src.normal[j, 2])
     if nj[0] * (x[0] - cj[0]) + nj[1] * (x[1] - cj[1]) + nj[2] * (x[2] - cj[2]) <= 0.0:
         return 0.0, 0
-    f = patch_ff(x, n_i, pa.corners[j], pa.k[j], pa.area[j], cj, nj, scratch)
+    f = patch_ff(x, n_i, src.corners[j], src.k[j], src.area[j], cj, nj, scratch)
     if f == 0.0:
         return 0.0, 0
-    v, rays = visibility(geo, x, n_i, pa.corners[j], pa.k[j], nj, samples, key, stack)
+    v, rays = visibility(geo, x, n_i, src.corners[j], src.k[j], nj, samples, key, stack)
     return f * v, rays
 
 
 @njit_parallel
-def shoot_raycast(sa, pa, shooters, unshot_of, samples, seed, shot, threshold, radiance, unshot, rays_out):
-    """Progressive-refinement shots (Cohen et al. 1988) from the patches `shooters` (int64 (m,)) with unshot
-    radiance `unshot_of` (m, 3): every other patch i receives ρ_i·F_ij·ΔL_j from each, F_ij by ray casting
-    (`_gather_ff`), added to `radiance` and `unshot` (n, 3). `shot` numbers the first of them (random streams).
-    A receiver whose share of a shot would stay below `threshold` (radiance, unoccluded) takes one shadow ray
-    instead of `samples`."""
-    n = pa.area.shape[0]
+def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, radiance, unshot,
+                  rays_out):
+    """Progressive-refinement shots (Cohen et al. 1988) from the patches `shooters` (int64 (m,), rows of `src`)
+    with unshot radiance `unshot_of` (m, 3): every receiving element i of `recv` (whose patch, `recv_patch[i]`,
+    is not the shooter) gets ρ_i·F_ij·ΔL_j from each, F_ij by ray casting (`_gather_ff`), added to `radiance` and
+    `unshot` (n_recv, 3). `shot` numbers the first shooter (random streams). A receiver whose share of a shot
+    would stay below `threshold` (radiance, unoccluded) takes one shadow ray instead of `samples`."""
+    n = recv.area.shape[0]
     m = shooters.shape[0]
     for c in prange((n + _CHUNK - 1) // _CHUNK):
         geo = geometry_of(sa)
         stack, stack_t, scratch = _scratch()
         rays = 0
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
-            rho = pa.rho[i]
+            rho = recv.rho[i]
             rmax = max(rho[0], rho[1], rho[2])
             if rmax <= 0.0:
                 continue
-            x, n_i = _lifted(pa, i)
+            x, n_i = _lifted(recv, i)
             for q in range(m):
                 j = shooters[q]
-                if i == j or pa.poly[i] == pa.poly[j]:
+                if recv_patch[i] == j:
                     continue
-                cj = pa.centre[j]
-                nj = (pa.normal[j, 0], pa.normal[j, 1], pa.normal[j, 2])
+                cj = src.centre[j]
+                nj = (src.normal[j, 0], src.normal[j, 1], src.normal[j, 2])
                 if nj[0] * (x[0] - cj[0]) + nj[1] * (x[1] - cj[1]) + nj[2] * (x[2] - cj[2]) <= 0.0:
                     continue  # j sends its light the other way
                 d0, d1, d2 = unshot_of[q, 0], unshot_of[q, 1], unshot_of[q, 2]
-                f = patch_ff(x, n_i, pa.corners[j], pa.k[j], pa.area[j], cj, nj, scratch)
+                f = patch_ff(x, n_i, src.corners[j], src.k[j], src.area[j], cj, nj, scratch)
                 if f == 0.0:
                     continue
                 k = samples if f * rmax * max(d0, d1, d2) >= threshold else 1
-                v, r = visibility(geo, x, n_i, pa.corners[j], pa.k[j], nj, k, sample_key(seed, i, shot + q), stack)
+                v, r = visibility(geo, x, n_i, src.corners[j], src.k[j], nj, k, sample_key(seed, i, shot + q), stack)
                 f *= v
                 rays += r
                 radiance[i, 0] += rho[0] * f * d0
@@ -146,22 +147,22 @@ def shoot_raycast(sa, pa, shooters, unshot_of, samples, seed, shot, threshold, r
 
 
 @njit_parallel
-def ff_rows_raycast(sa, pa, rows, samples, seed, out, rays_out):
-    """out[r, j] = F_{rows[r] j} for every patch j (float32 (len(rows), n)), by ray casting: a band of the full
-    form-factor matrix of the Gauss–Seidel and Jacobi solvers."""
-    n = pa.area.shape[0]
+def ff_rows_raycast(sa, recv, src, recv_patch, rows, samples, seed, out, rays_out):
+    """out[r, j] = F from receiving element rows[r] of `recv` to every shooting patch j of `src` (float32
+    (len(rows), n_src)), by ray casting: a band of the form-factor matrix of the Gauss–Seidel and Jacobi solvers."""
+    n = src.area.shape[0]
     m = rows.shape[0]
     for r in prange(m):
         geo = geometry_of(sa)
         stack, stack_t, scratch = _scratch()
         i = rows[r]
-        x, n_i = _lifted(pa, i)
+        x, n_i = _lifted(recv, i)
         count = 0
         for j in range(n):
             out[r, j] = 0.0
-            if j == i or pa.poly[j] == pa.poly[i]:
+            if recv_patch[i] == j:
                 continue
-            f, rays = _gather_ff(geo, pa, i, j, x, n_i, samples, sample_key(seed, i, j), stack, scratch)
+            f, rays = _gather_ff(geo, src, j, x, n_i, samples, sample_key(seed, i, j), stack, scratch)
             out[r, j] = f
             count += rays
         rays_out[r] = count
@@ -183,15 +184,15 @@ def _cosine_dir(n, u1, u2):
 
 
 @njit_parallel
-def shoot_stochastic(sa, pa, tri_poly, shooters, counts, first_ray, power, seed, iteration, n_chunks, received,
-                     rays_out):
+def shoot_stochastic(sa, recv, src, tri_poly, shooters, counts, first_ray, power, seed, iteration, n_chunks,
+                     received, rays_out):
     """One iteration of stochastic Jacobi radiosity (Neumann et al. 1995; Bekaert's *Advanced Global
-    Illumination* ch. 6): patch shooters[s] sends counts[s] rays from uniform points, cosine-distributed, each
-    carrying power[s] (its unshot power ΔΦ = π·A·ΔL over its ray count, per channel); the first surface hit
-    receives it (one side: the side the ray arrives on) times its reflectance. `received` (n_chunks, n, 3) is
-    summed over its first axis by the caller: each chunk of rays adds into its own row, so the sum does not
-    depend on the thread count. `tri_poly` maps a BVH triangle to its polygon; `first_ray` (len(shooters),)
-    numbers the rays of each shooter globally (the chunks split that numbering)."""
+    Illumination* ch. 6): patch shooters[s] of `src` sends counts[s] rays from uniform points, cosine-distributed,
+    each carrying power[s] (its unshot power ΔΦ = π·A·ΔL over its ray count, per channel); the first surface hit
+    (the receiving elements `recv`, whose polygons the BVH `sa` holds) receives it, on the side the ray arrives
+    on, times its reflectance. `received` (n_chunks, n_recv, 3) is summed over its first axis by the caller: each
+    chunk of rays adds into its own row, so the sum does not depend on the thread count. `tri_poly` maps a BVH
+    triangle to its polygon; `first_ray` numbers each shooter's first ray (the chunks split that numbering)."""
     total = first_ray[-1] + counts[-1] if shooters.shape[0] else 0
     for c in prange(n_chunks):
         geo = geometry_of(sa)
@@ -199,9 +200,7 @@ def shoot_stochastic(sa, pa, tri_poly, shooters, counts, first_ray, power, seed,
         lo = total * c // n_chunks
         hi = total * (c + 1) // n_chunks
         rays = 0
-        s = 0
-        while s + 1 < shooters.shape[0] and first_ray[s + 1] <= lo:
-            s += 1
+        s = np.searchsorted(first_ray, lo, side="right") - 1 if lo < total else 0
         for ray in range(lo, hi):
             while s + 1 < shooters.shape[0] and first_ray[s + 1] <= ray:
                 s += 1
@@ -209,8 +208,8 @@ def shoot_stochastic(sa, pa, tri_poly, shooters, counts, first_ray, power, seed,
             key = sample_key(seed, iteration, ray)
             u1, u2 = rand2_key(key, 0)
             u3, u4 = rand2_key(key, 1)
-            y = polygon_point(pa.corners[j], pa.k[j], u1, u2)
-            nj = (pa.normal[j, 0], pa.normal[j, 1], pa.normal[j, 2])
+            y = polygon_point(src.corners[j], src.k[j], u1, u2)
+            nj = (src.normal[j, 0], src.normal[j, 1], src.normal[j, 2])
             d = _cosine_dir(nj, u3, u4)
             o = offset_origin(y, nj, d, _LIFT)
             hit = closest_hit(geo, o, d, 0.0, config.T_FAR, stack, stack_t, 0.0)
@@ -218,12 +217,12 @@ def shoot_stochastic(sa, pa, tri_poly, shooters, counts, first_ray, power, seed,
             if hit[0] < 0.0:
                 continue
             poly = tri_poly[hit[1]]
-            pn = pa.poly_normal[poly]
+            pn = recv.poly_normal[poly]
             side = 0 if pn[0] * d[0] + pn[1] * d[1] + pn[2] * d[2] < 0.0 else 1
-            i = pa.side_patch[poly, side]
+            i = recv.side_patch[poly, side]
             if i < 0:
                 continue
-            rho = pa.rho[i]
+            rho = recv.rho[i]
             received[c, i, 0] += rho[0] * power[s, 0]
             received[c, i, 1] += rho[1] * power[s, 1]
             received[c, i, 2] += rho[2] * power[s, 2]
@@ -231,41 +230,47 @@ def shoot_stochastic(sa, pa, tri_poly, shooters, counts, first_ray, power, seed,
 
 
 @njit
-def gauss_seidel_sweep(F, rho, emission, radiance):
-    """One Gauss–Seidel sweep of L_i = Le_i + ρ_i Σ_j F_ij L_j (F float32 (n, n)), in place; returns the largest
-    change of any patch's radiance (luminance: the mean of its channels)."""
-    n = F.shape[0]
+def gauss_seidel_sweep(F, rho, emission, recv_area, recv_patch, patch_area, radiance, patch_radiance):
+    """One Gauss–Seidel sweep of L_i = E_i + ρ_i Σ_j F_ij L̄_j over the receiving elements i (F float32
+    (n_recv, n_src)), L̄_j the area-weighted mean of patch j's elements, kept up to date as each element
+    changes; in place. Returns the largest change of an element's radiance (mean of its channels)."""
+    n, m = F.shape
     worst = 0.0
     for i in range(n):
         s0 = s1 = s2 = 0.0
         row = F[i]
-        for j in range(n):
+        for j in range(m):
             f = row[j]
             if f != 0.0:
-                s0 += f * radiance[j, 0]
-                s1 += f * radiance[j, 1]
-                s2 += f * radiance[j, 2]
+                s0 += f * patch_radiance[j, 0]
+                s1 += f * patch_radiance[j, 1]
+                s2 += f * patch_radiance[j, 2]
         n0 = emission[i, 0] + rho[i, 0] * s0
         n1 = emission[i, 1] + rho[i, 1] * s1
         n2 = emission[i, 2] + rho[i, 2] * s2
-        change = abs(n0 - radiance[i, 0]) + abs(n1 - radiance[i, 1]) + abs(n2 - radiance[i, 2])
-        worst = max(worst, change / 3.0)
+        d0, d1, d2 = n0 - radiance[i, 0], n1 - radiance[i, 1], n2 - radiance[i, 2]
+        worst = max(worst, (abs(d0) + abs(d1) + abs(d2)) / 3.0)
         radiance[i, 0], radiance[i, 1], radiance[i, 2] = n0, n1, n2
+        p = recv_patch[i]
+        share = recv_area[i] / patch_area[p]
+        patch_radiance[p, 0] += share * d0
+        patch_radiance[p, 1] += share * d1
+        patch_radiance[p, 2] += share * d2
     return worst
 
 
 @njit_parallel
-def jacobi_sweep(F, rho, emission, radiance, out):
-    """out = Le + ρ·(F @ L): one Jacobi sweep (every patch from the previous iterate), in parallel over rows."""
-    n = F.shape[0]
+def jacobi_sweep(F, rho, emission, patch_radiance, out):
+    """out = E + ρ·(F @ L̄): one Jacobi sweep (every element from the previous iterate's patch means)."""
+    n, m = F.shape
     for i in prange(n):
         s0 = s1 = s2 = 0.0
-        for j in range(n):
+        for j in range(m):
             f = F[i, j]
             if f != 0.0:
-                s0 += f * radiance[j, 0]
-                s1 += f * radiance[j, 1]
-                s2 += f * radiance[j, 2]
+                s0 += f * patch_radiance[j, 0]
+                s1 += f * patch_radiance[j, 1]
+                s2 += f * patch_radiance[j, 2]
         out[i, 0] = emission[i, 0] + rho[i, 0] * s0
         out[i, 1] = emission[i, 1] + rho[i, 1] * s1
         out[i, 2] = emission[i, 2] + rho[i, 2] * s2

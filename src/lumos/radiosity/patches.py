@@ -403,3 +403,81 @@ def _assemble(b: _Builder) -> Patches:
         emission=np.ascontiguousarray(np.concatenate(cols["le"])), object_id=np.concatenate(cols["obj"]),
         material=np.concatenate(cols["mat"]), smooth_group=np.concatenate(cols["group"]),
         optics=np.ascontiguousarray(np.concatenate(cols["optics"])))
+
+
+def refine(p: Patches, split_poly: np.ndarray) -> tuple[Patches, np.ndarray]:
+    """`p` with the polygons flagged in `split_poly` (bool (npoly,)) cut in four (a quad through its edge
+    midpoints and centre, a triangle through its edge midpoints), each side's patch into the four patches of the
+    same side; returns (the refined patches, the index in `p` of each refined patch's parent)."""
+    polys = p.polys
+    keep = ~split_poly
+    quads = split_poly & (polys[:, 3] >= 0)
+    tris = split_poly & (polys[:, 3] < 0)
+    v = p.vertices
+    new_v = [v]
+    new_polys = [polys[keep]]
+    origin = [np.nonzero(keep)[0]]  # the old polygon of each new one
+    base = len(v)
+    if quads.any():
+        q = polys[quads]
+        c = v[q]  # (m, 4, 3)
+        mids = 0.5 * (c + np.roll(c, -1, axis=1))  # edge midpoints m01, m12, m23, m30
+        centre = c.mean(axis=1)
+        m = len(q)
+        pts = np.concatenate([mids.reshape(-1, 3), centre])  # 4m midpoints, then m centres
+        mid = base + np.arange(4 * m).reshape(m, 4)
+        cen = base + 4 * m + np.arange(m)
+        new_v.append(pts)
+        base += len(pts)
+        sub = np.stack([np.stack([q[:, 0], mid[:, 0], cen, mid[:, 3]], 1),
+                        np.stack([mid[:, 0], q[:, 1], mid[:, 1], cen], 1),
+                        np.stack([cen, mid[:, 1], q[:, 2], mid[:, 2]], 1),
+                        np.stack([mid[:, 3], cen, mid[:, 2], q[:, 3]], 1)], axis=1).reshape(-1, 4)
+        new_polys.append(sub)
+        origin.append(np.repeat(np.nonzero(quads)[0], 4))
+    if tris.any():
+        t = polys[tris][:, :3]
+        c = v[t]
+        mids = 0.5 * (c + np.roll(c, -1, axis=1))  # m01, m12, m20
+        m = len(t)
+        mid = base + np.arange(3 * m).reshape(m, 3)
+        new_v.append(mids.reshape(-1, 3))
+        base += 3 * m
+        minus = np.full(m, -1)
+        sub = np.stack([np.stack([t[:, 0], mid[:, 0], mid[:, 2], minus], 1),
+                        np.stack([mid[:, 0], t[:, 1], mid[:, 1], minus], 1),
+                        np.stack([mid[:, 2], mid[:, 1], t[:, 2], minus], 1),
+                        np.stack([mid[:, 0], mid[:, 1], mid[:, 2], minus], 1)], axis=1).reshape(-1, 4)
+        new_polys.append(sub)
+        origin.append(np.repeat(np.nonzero(tris)[0], 4))
+    vertices = np.concatenate(new_v)
+    polys2 = np.concatenate(new_polys).astype(np.int32)
+    origin = np.concatenate(origin)
+    # each side of each new polygon inherits its old polygon's side
+    sides = p.side_patch[origin]  # (npoly2, 2): the parent patch of each side, or -1
+    pp, ss, parent = [], [], []
+    side_patch = np.full((len(polys2), 2), -1, np.int32)
+    n = 0
+    for side in (0, 1):
+        has = np.nonzero(sides[:, side] >= 0)[0]
+        side_patch[has, side] = np.arange(n, n + len(has))
+        n += len(has)
+        pp.append(has)
+        ss.append(np.full(len(has), 1 if side == 0 else -1, np.int8))
+        parent.append(sides[has, side])
+    patch_poly = np.concatenate(pp).astype(np.int32)
+    patch_side = np.concatenate(ss)
+    parent = np.concatenate(parent).astype(np.int64)
+    corners = vertices[np.maximum(polys2, 0)]
+    tri = polys2[:, 3] < 0
+    corners[tri, 3] = corners[tri, 0]
+    cross = 0.5 * np.cross(corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1])
+    cross[tri] = 0.5 * np.cross(corners[tri, 1] - corners[tri, 0], corners[tri, 2] - corners[tri, 0])
+    area = np.linalg.norm(cross, axis=1)
+    centre = np.where(tri[:, None], corners[:, :3].mean(axis=1), corners.mean(axis=1))
+    return Patches(
+        vertices=vertices, polys=polys2, poly_normal=p.poly_normal[origin], side_patch=side_patch,
+        patch_poly=patch_poly, patch_side=patch_side, area=area[patch_poly], centre=centre[patch_poly],
+        normal=p.normal[parent], reflectance=p.reflectance[parent], emission=p.emission[parent],
+        object_id=p.object_id[parent], material=p.material[parent], smooth_group=p.smooth_group[parent],
+        optics=p.optics[parent]), parent

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import LumosError
 from ..kernels import layout as L
-from .patches import Patches
+from .patches import Patches, refine
 from .solution import Solution
 
 
@@ -84,40 +84,89 @@ def solve(scene, settings, progress: Optional[Callable[[float], None]] = None,
 
 
 def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
-    """`solve` on a scene compiled for method radiosity (`CompiledScene.patches`)."""
-    from ..kernels.radiosity import direct_light
+    """`solve` on a scene compiled for method radiosity (`CompiledScene.patches`).
+
+    With `subdivide`, the solution is refined up to `subdivide_levels` times: elements whose radiance differs
+    from a neighbour's on the same surface by more than `subdivide_threshold` (relative) are cut in four and
+    the system solved again, the patches still shooting as one (`solvers.Level`)."""
     from . import solvers
 
     rs = settings.radiosity
     t0 = time.perf_counter()
     patches = compiled.patches
-    pa = patch_arrays(patches)
-    bvh, tri_poly = patch_bvh(patches)
-    t_mesh = time.perf_counter()
+    src = patch_arrays(patches)
+    elements, recv_patch = patches, np.arange(patches.n, dtype=np.int64)
+    direct_s = ff_s = 0.0
+    rays = iterations = 0
+    levels = rs.subdivide_levels if rs.subdivide else 0
+    for level_index in range(levels + 1):
+        recv = src if level_index == 0 else patch_arrays(elements)
+        bvh, tri_poly = patch_bvh(elements)
+        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly)
+        t1 = time.perf_counter()
+        sent, r = _first_light(compiled, recv, bvh, rs, settings.seed)
+        direct_s += time.perf_counter() - t1
+        result = solvers.run(rs, level, sent, settings.seed, progress, say)
+        rays += r + result.rays
+        ff_s += result.form_factor_s
+        iterations += result.iterations
+        if level_index == levels:
+            break
+        split = _to_refine(elements, recv, result.radiance, rs.subdivide_threshold)
+        if not split.any():
+            break
+        if say is not None:
+            say(f"refining {int(split.sum()):,} of {len(split):,} polygons where the radiance varies")
+        elements, parent = refine(elements, split)
+        recv_patch = recv_patch[parent]
+    t_solve = time.perf_counter()
+    stats = {
+        "patches": int(patches.n), "elements": int(elements.n), "polygons": int(len(elements.polys)),
+        "direct_s": direct_s, "form_factor_s": ff_s, "solve_s": t_solve - t0 - direct_s - ff_s,
+        "iterations": int(iterations), "residual": float(result.residual), "rays": int(rays),
+        "solver": solvers.chosen(rs, patches.n), "form_factors": rs.form_factors,
+    }
+    return build_solution(elements, recv, result.radiance, recv_patch, rs.model_dump(), stats, compiled.digest)
 
-    # E: emission, and the first bounce of the point and directional lights
-    first = np.zeros((patches.n, 3))
-    chunks = -(-patches.n // 256)
-    rays = np.zeros(chunks, np.int64)
+
+def _first_light(compiled, recv, bvh, rs, seed):
+    """E of every element: its emission and the first bounce of point and directional lights; (E, rays)."""
+    from ..kernels.radiosity import direct_light
+
+    n = len(recv.area)
+    first = np.zeros((n, 3))
+    rays = np.zeros(-(-n // 256), np.int64)
     if np.any(compiled.arrays.light_kind <= L.LIGHT_DIRECTIONAL):
-        direct_light(bvh.arrays, compiled.arrays, pa, np.int64(rs.visibility_samples), np.int64(settings.seed),
-                     first, rays)
-    sent = pa.emission + first
+        direct_light(bvh.arrays, compiled.arrays, recv, np.int64(rs.visibility_samples), np.int64(seed), first, rays)
+    sent = recv.emission + first
     if not np.any(sent > 0):
         raise LumosError("radiosity: nothing in the scene emits light (no area light, emissive object, point or "
                          "directional light reaches a surface)")
-    t_light = time.perf_counter()
-    result = solvers.run(rs, pa, bvh, tri_poly, sent, settings.seed, progress, say)
-    t_solve = time.perf_counter()
-    stats = {
-        "patches": int(patches.n), "polygons": int(len(patches.polys)), "bvh_s": t_mesh - t0,
-        "direct_s": t_light - t_mesh, "form_factor_s": result.form_factor_s,
-        "solve_s": t_solve - t_light - result.form_factor_s, "iterations": int(result.iterations),
-        "residual": float(result.residual), "rays": int(rays.sum()) + int(result.rays),
-        "solver": solvers.chosen(rs, patches.n),
-        "form_factors": rs.form_factors,
-    }
-    return build_solution(patches, pa, result.radiance, rs.model_dump(), stats, compiled.digest)
+    return sent, int(rays.sum())
+
+
+def _to_refine(elements: Patches, recv, radiance: np.ndarray, threshold: float) -> np.ndarray:
+    """The polygons to cut: those of elements at a corner where the radiance of the surface's elements meeting
+    there spans more than `threshold` of their mean (a shadow boundary, a steep gradient), ignoring the
+    darkest (below 1/1000 of the brightest surface), where no one sees the difference."""
+    from .display import corner_buckets
+
+    owner, starts, order = corner_buckets(elements, recv)
+    lum = radiance.mean(axis=1)
+    floor = 1e-3 * float(lum[recv.emission.max(axis=1) <= 0].max(initial=lum.max()))
+    flagged = np.zeros(elements.n, bool)
+    vals = lum[owner[order]]
+    for b in range(len(starts) - 1):
+        lo, hi = starts[b], starts[b + 1]
+        if hi - lo < 2:
+            continue
+        v = vals[lo:hi]
+        top, bottom = v.max(), v.min()
+        if top > floor and (top - bottom) > threshold * max(v.mean(), floor):
+            flagged[owner[order[lo:hi]]] = True
+    split = np.zeros(len(elements.polys), bool)
+    split[elements.patch_poly[flagged]] = True
+    return split
 
 
 def _twins(p: Patches) -> np.ndarray:
@@ -126,8 +175,8 @@ def _twins(p: Patches) -> np.ndarray:
     return np.ascontiguousarray(other, np.int32)
 
 
-def build_solution(patches: Patches, pa: L.PatchArrays, radiance: np.ndarray, settings: dict, stats: dict,
-                   digest: str) -> Solution:
+def build_solution(patches: Patches, pa: L.PatchArrays, radiance: np.ndarray, element_patch: np.ndarray,
+                   settings: dict, stats: dict, digest: str) -> Solution:
     """The Solution: the patches with their radiance, and the display mesh (radiance averaged to corners)."""
     from .display import display_mesh
 
@@ -140,7 +189,7 @@ def build_solution(patches: Patches, pa: L.PatchArrays, radiance: np.ndarray, se
         element_vertices=element_vertices, element_polys=element_polys, element_normal=pa.normal.copy(),
         element_area=pa.area.copy(), element_reflectance=pa.rho.copy(), element_emission=pa.emission.copy(),
         element_radiance=np.asarray(radiance, np.float64), element_object=patches.object_id.astype(np.int32),
-        element_material=patches.material.astype(np.int32), element_patch=np.arange(n, dtype=np.int32),
+        element_material=patches.material.astype(np.int32), element_patch=np.asarray(element_patch, np.int32),
         element_optics=np.ascontiguousarray(patches.optics, np.float64), element_twin=_twins(patches),
         vertices=vertices, vertex_normal=normals, vertex_radiance=values, faces=faces, face_element=face_element,
         settings=settings, stats=stats, scene_digest=digest)

@@ -1,6 +1,12 @@
 """The four radiosity solvers, one function each, over the same patches (`layout.PatchArrays`) and the same E.
 
-    L = E + ρ·F·L          (per patch and channel; F_ij the form factor from patch i to patch j)
+    L_i = E_i + ρ_i · Σ_j F_ij · L̄_j       (per element i and channel; F_ij from element i to patch j)
+
+Two levels (Cohen, Greenberg, Immel & Brock 1986, "An efficient radiosity approach for realistic image
+synthesis"): **elements** receive and are drawn; **patches** shoot and are gathered from, each with the
+area-weighted mean radiance L̄ of its elements. Unrefined, every patch is its own single element; adaptive
+subdivision splits elements where the solution varies, and a refined patch still shoots and is gathered from
+as one, so refining costs receivers, not shooters.
 
 - **gauss_seidel** and **jacobi** (gathering): the whole matrix F first (ray-cast or hemicube form factors),
   then sweeps; Jacobi computes every patch from the previous iterate, Gauss–Seidel uses each new value at once
@@ -44,12 +50,32 @@ RAYS_PER_PATCH = 100
 
 @dataclass
 class Result:
-    radiance: np.ndarray  # float64 (n, 3)
+    radiance: np.ndarray  # float64 (n_elements, 3)
     iterations: int
     residual: float  # unshot power / power sent (progressive, stochastic); last sweep's largest change over the
     # mean radiance (gauss_seidel, jacobi)
     rays: int
     form_factor_s: float
+
+
+@dataclass
+class Level:
+    """What the solvers work on: receiving elements and shooting patches, and the elements' BVH."""
+
+    recv: object  # layout.PatchArrays of the elements
+    src: object  # layout.PatchArrays of the patches
+    recv_patch: np.ndarray  # int64 (n_elements,): the patch each element belongs to
+    bvh: object  # CompiledScene of the elements' polygons
+    tri_poly: np.ndarray  # int32 (m,): the element polygon of each BVH triangle
+
+    def patch_means(self, values: np.ndarray) -> np.ndarray:
+        """The area-weighted mean of `values` (n_elements, 3) over each patch's elements: (n_patches, 3)."""
+        n = len(self.src.area)
+        a = self.recv.area
+        out = np.zeros((n, 3))
+        for c in range(3):
+            out[:, c] = np.bincount(self.recv_patch, a * values[:, c], minlength=n)
+        return out / self.src.area[:, None]
 
 
 def _lum(x: np.ndarray) -> np.ndarray:
@@ -63,11 +89,12 @@ def chosen(rs, n: int) -> str:
     return "progressive" if n <= AUTO_PROGRESSIVE_MAX else "stochastic"
 
 
-def run(rs, pa, bvh, tri_poly, sent, seed, progress=None, say=None) -> Result:
-    rs = rs.model_copy(update={"solver": chosen(rs, len(pa.area))})
+def run(rs, level: Level, sent, seed, progress=None, say=None) -> Result:
+    """Solve with `rs.solver` for the elements' radiance, E = `sent` (n_elements, 3)."""
+    rs = rs.model_copy(update={"solver": chosen(rs, len(level.src.area))})
     solver = {"gauss_seidel": gathering, "jacobi": gathering, "progressive": progressive,
               "stochastic": stochastic}[rs.solver]
-    return solver(rs, pa, bvh, tri_poly, sent, int(seed), progress, say)
+    return solver(rs, level, sent, int(seed), progress, say)
 
 
 # ------------------------------------------------------------------------------------------------ gathering
@@ -81,55 +108,60 @@ def matrix_limit() -> int:
     return int(np.sqrt(MATRIX_MEMORY_SHARE * avail / 4))
 
 
-def form_factor_matrix(rs, pa, bvh, seed) -> tuple[np.ndarray, int]:
-    """F float32 (n, n) by the chosen method, and the rays it traced."""
-    n = len(pa.area)
+def form_factor_matrix(rs, level: Level, seed) -> tuple[np.ndarray, int]:
+    """F float32 (n_elements, n_patches) by the chosen method, and the rays it traced."""
+    n, m = len(level.recv.area), len(level.src.area)
     limit = matrix_limit()
-    if n > limit:
-        raise LumosError(f"radiosity.solver: {rs.solver} stores the {n:,}×{n:,} form-factor matrix "
-                         f"({4 * n * n / 2**30:.1f} GiB), more than this machine can hold (at most {limit:,} "
-                         "patches here); use solver: progressive or stochastic, which store no matrix")
-    F = np.zeros((n, n), np.float32)
+    if n * m > limit * limit:
+        raise LumosError(f"radiosity.solver: {rs.solver} stores the {n:,}×{m:,} form-factor matrix "
+                         f"({4 * n * m / 2**30:.1f} GiB), more than this machine can hold (at most about "
+                         f"{limit:,} patches here); use solver: progressive or stochastic, which store no matrix")
+    F = np.zeros((n, m), np.float32)
     if rs.form_factors == "hemicube":
         from .formfactors import hemicube_matrix
 
-        hemicube_matrix(pa, rs.hemicube_resolution, seed, F)
+        hemicube_matrix(rs, level, seed, F)
         return F, 0
     from ..kernels.radiosity import ff_rows_raycast
 
-    band = max(1, min(n, (1 << 20) // max(n, 1)))  # rows per kernel call: about a million form factors
+    band = max(1, min(n, (1 << 20) // max(m, 1)))  # rows per kernel call: about a million form factors
     rays = 0
     for start in range(0, n, band):
         rows = np.arange(start, min(n, start + band), dtype=np.int64)
         counts = np.zeros(len(rows), np.int64)
-        ff_rows_raycast(bvh.arrays, pa, rows, np.int64(rs.visibility_samples), np.int64(seed), F[start:start + len(rows)],
-                        counts)
+        ff_rows_raycast(level.bvh.arrays, level.recv, level.src, level.recv_patch, rows,
+                        np.int64(rs.visibility_samples), np.int64(seed), F[start:start + len(rows)], counts)
         rays += int(counts.sum())
     return F, rays
 
 
-def gathering(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
+def gathering(rs, level: Level, sent, seed, progress, say) -> Result:
     from ..kernels.radiosity import gauss_seidel_sweep, jacobi_sweep
 
+    recv = level.recv
     t0 = time.perf_counter()
-    F, rays = form_factor_matrix(rs, pa, bvh, seed)
+    F, rays = form_factor_matrix(rs, level, seed)
     ff_s = time.perf_counter() - t0
     radiance = sent.copy()
+    means = level.patch_means(radiance)
     limit = rs.max_iterations or 1000
     change = np.inf
+    scale = 1.0
     it = 0
     nxt = np.empty_like(radiance)
     while it < limit:
         it += 1
         if rs.solver == "gauss_seidel":
-            change = gauss_seidel_sweep(F, pa.rho, sent, radiance)
+            change = gauss_seidel_sweep(F, recv.rho, sent, recv.area, level.recv_patch, level.src.area, radiance,
+                                        means)
         else:
-            jacobi_sweep(F, pa.rho, sent, radiance, nxt)
+            jacobi_sweep(F, recv.rho, sent, means, nxt)
             change = float(np.abs(nxt - radiance).mean(axis=1).max())
             radiance, nxt = nxt, radiance
+            means = level.patch_means(radiance)
         # relative to the mean radiance of the surfaces (not to the brightest emitter, which would stop the
         # sweeps while the walls are still percents away)
-        scale = max(float((_lum(radiance) * pa.area).sum() / pa.area.sum()), 1e-300)
+        scale = max(float((_lum(radiance) * recv.area).sum() / recv.area.sum()), 1e-300)
         if say is not None:
             say(f"sweep {it}: largest change {change / scale:.2e} of the mean radiance")
         if progress is not None:
@@ -142,28 +174,30 @@ def gathering(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
 # ---------------------------------------------------------------------------------------------- progressive
 
 
-def progressive(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
-    """Shoot from the brightest unshot patch until the unshot power is below `tolerance` of the power sent."""
+def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
+    """Shoot from the brightest unshot patches until the unshot power is below `tolerance` of the power sent."""
     from ..kernels.radiosity import shoot_raycast
 
+    recv, src = level.recv, level.src
     radiance = sent.copy()
-    unshot = sent.copy()
-    area = pa.area
-    total = float((_lum(sent) * area).sum())
+    unshot_e = sent.copy()  # per element
+    area = src.area
+    total = float((_lum(sent) * recv.area).sum())
     threshold = SHOT_THRESHOLD * float(_lum(sent).max())
     limit = rs.max_iterations or 50 * len(area) + 100
-    chunks = -(-len(area) // 256)
+    chunks = -(-len(recv.area) // 256)
     rays = np.zeros(chunks, np.int64)
     hemi = None
     if rs.form_factors == "hemicube":
         from .formfactors import HemicubeShooter
 
-        hemi = HemicubeShooter(pa, rs.hemicube_resolution, seed)
+        hemi = HemicubeShooter(rs, level, seed)
     ff_s = 0.0
     shots = 0
     residual = 1.0
     next_report = 0.0
     while shots < limit:
+        unshot = level.patch_means(unshot_e)
         power = _lum(unshot) * area
         residual = float(power.sum()) / total
         if residual <= rs.tolerance:
@@ -175,14 +209,14 @@ def progressive(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
         top = top[np.argsort(-power[top], kind="stable")]
         top = top[power[top] >= SHOT_BATCH_SHARE * power[top[0]]].astype(np.int64)
         d = unshot[top].copy()
-        unshot[top] = 0.0
+        unshot_e[np.isin(level.recv_patch, top)] = 0.0
         t0 = time.perf_counter()
         if hemi is not None:
             for q, j in enumerate(top):
-                hemi.shoot(int(j), d[q], shots + q, radiance, unshot)
+                hemi.shoot(int(j), d[q], shots + q, radiance, unshot_e)
         else:
-            shoot_raycast(bvh.arrays, pa, top, d, np.int64(rs.visibility_samples), np.int64(seed), np.int64(shots),
-                          threshold, radiance, unshot, rays)
+            shoot_raycast(level.bvh.arrays, recv, src, level.recv_patch, top, d, np.int64(rs.visibility_samples),
+                          np.int64(seed), np.int64(shots), threshold, radiance, unshot_e, rays)
         ff_s += time.perf_counter() - t0
         shots += len(top)
         if progress is not None:
@@ -190,8 +224,8 @@ def progressive(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
         if say is not None and time.perf_counter() >= next_report:
             say(f"shot {shots}: unshot power {residual:.2%} of what was sent")
             next_report = time.perf_counter() + 1.0
-    residual = float((_lum(unshot) * area).sum()) / total
-    radiance = radiance + ambient_term(pa, unshot)
+    residual = float((_lum(unshot_e) * recv.area).sum()) / total
+    radiance = radiance + ambient_term(recv, unshot_e)
     return Result(radiance, shots, residual, int(rays.sum()), ff_s)
 
 
@@ -207,16 +241,17 @@ def ambient_term(pa, unshot: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------------------------- stochastic
 
 
-def stochastic(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
+def stochastic(rs, level: Level, sent, seed, progress, say) -> Result:
     """Stochastic Jacobi: iterations of random-ray shooting of all the unshot power at once."""
     from ..kernels.radiosity import shoot_stochastic
 
-    n = len(pa.area)
-    area = pa.area
+    recv, src = level.recv, level.src
+    n = len(recv.area)
+    area = src.area
     radiance = sent.copy()
-    unshot = sent.copy()
-    total = float((_lum(sent) * area).sum())
-    per_iteration = rs.rays or RAYS_PER_PATCH * n
+    unshot_e = sent.copy()
+    total = float((_lum(sent) * recv.area).sum())
+    per_iteration = rs.rays or RAYS_PER_PATCH * len(area)
     limit = rs.max_iterations or 64
     received = np.zeros((STOCHASTIC_CHUNKS, n, 3))
     counts_out = np.zeros(STOCHASTIC_CHUNKS, np.int64)
@@ -224,6 +259,7 @@ def stochastic(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
     it = 0
     residual = 1.0
     while it < limit:
+        unshot = level.patch_means(unshot_e)
         power = _lum(unshot) * area
         residual = float(power.sum()) / total
         if residual <= rs.tolerance:
@@ -237,16 +273,16 @@ def stochastic(rs, pa, bvh, tri_poly, sent, seed, progress, say) -> Result:
         first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
         ray_power = np.pi * area[shooters, None] * unshot[shooters] / counts[:, None]
         received[:] = 0.0
-        shoot_stochastic(bvh.arrays, pa, tri_poly, shooters, counts, first, ray_power, np.int64(seed), np.int64(it),
-                         np.int64(STOCHASTIC_CHUNKS), received, counts_out)
+        shoot_stochastic(level.bvh.arrays, recv, src, level.tri_poly, shooters, counts, first, ray_power,
+                         np.int64(seed), np.int64(it), np.int64(STOCHASTIC_CHUNKS), received, counts_out)
         rays += int(counts_out.sum())
-        gained = received.sum(axis=0) / (np.pi * area[:, None])  # power → radiance of the receiving patch
-        unshot = gained
+        gained = received.sum(axis=0) / (np.pi * recv.area[:, None])  # power → radiance of the receiving element
+        unshot_e = gained
         radiance = radiance + gained
         it += 1
         if say is not None:
             say(f"iteration {it}: {int(counts_out.sum()):,} rays, unshot power {residual:.2%} of what was sent")
         if progress is not None:
             progress(min(1.0, np.log(max(residual, 1e-30)) / np.log(rs.tolerance)))
-    residual = float((_lum(unshot) * area).sum()) / total
+    residual = float((_lum(unshot_e) * recv.area).sum()) / total
     return Result(radiance, it, residual, rays, 0.0)

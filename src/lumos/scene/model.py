@@ -104,7 +104,7 @@ class RadiositySettings(StrictModel):
     #: adaptive refinement: split patches whose radiance differs from a neighbour's by more than the threshold
     #: (relative), down to `subdivide_levels` levels
     subdivide: bool = False
-    subdivide_threshold: Positive = 0.1
+    subdivide_threshold: Positive = 0.25
     subdivide_levels: Annotated[int, Field(ge=1, le=8)] = 2
     #: stop when the unshot power (progressive, stochastic) or the largest change of a sweep (gauss_seidel,
     #: jacobi), relative to the light sent out, falls below this
