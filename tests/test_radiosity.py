@@ -139,14 +139,21 @@ def inner(sol):
     return np.einsum("ij,ij->i", sol.element_normal, c - sol.element_vertices[sol.element_polys[:, 0]]) > 0
 
 
-@pytest.mark.parametrize("solver", ["progressive", "gauss_seidel", "jacobi", "stochastic"])
-def test_furnace(solver):
-    sol = solve(furnace_box(), settings(solver=solver, patch_size=0.6, tolerance=1e-4, rays=200_000))
+@pytest.mark.parametrize("solver, form_factors", [("progressive", "raycast"), ("gauss_seidel", "raycast"),
+                                                  ("jacobi", "raycast"), ("stochastic", "raycast"),
+                                                  ("progressive", "hemicube"), ("jacobi", "hemicube")])
+def test_furnace(solver, form_factors):
+    sol = solve(furnace_box(), settings(solver=solver, form_factors=form_factors, patch_size=0.6, tolerance=1e-4,
+                                        rays=200_000, hemicube_resolution=64))
     L = sol.element_radiance[inner(sol)]
     mean = (L * sol.element_area[inner(sol), None]).sum(axis=0) / sol.element_area[inner(sol)].sum()
     np.testing.assert_allclose(mean, 0.6, rtol=0.01)
-    if solver != "stochastic":  # deterministic: every patch, not only the mean
-        np.testing.assert_allclose(L, 0.6, rtol=0.01)
+    if solver == "stochastic":
+        return
+    # deterministic: every patch, not only the mean; a progressive shot's hemicube samples the shooter at its
+    # centre only, and reciprocity then spreads that point's view over the receiver (Cohen et al. 1988's known
+    # error for large neighbouring patches), so its patches scatter more
+    np.testing.assert_allclose(L, 0.6, rtol=0.04 if (solver, form_factors) == ("progressive", "hemicube") else 0.01)
 
 
 def test_energy_balance_in_a_closed_scene():
@@ -168,11 +175,13 @@ def test_parallel_squares():
     scene = {"lights": [{"type": "area", "shape": "rect", "corner": [0, 1, 0], "edge_u": [1, 0, 0],
                          "edge_v": [0, 0, 1], "radiance": le}],
              "objects": [square([0, 0, 1], [1, 0, 0], [0, 0, -1], {"kd": rho})]}
-    for solver in ("progressive", "jacobi"):
-        sol = solve(scene, settings(solver=solver, patch_size=0.1, tolerance=1e-4))
+    for solver, ff in (("progressive", "raycast"), ("jacobi", "raycast"), ("progressive", "hemicube"),
+                       ("gauss_seidel", "hemicube")):
+        sol = solve(scene, settings(solver=solver, form_factors=ff, patch_size=0.1, tolerance=1e-4,
+                                    hemicube_resolution=256))
         up = (sol.element_object == 0) & (sol.element_normal[:, 1] > 0.5)
         mean = (sol.element_radiance[up, 0] * sol.element_area[up]).sum() / sol.element_area[up].sum()
-        assert mean == pytest.approx(rho * 0.19982 * le, rel=0.01), solver
+        assert mean == pytest.approx(rho * 0.19982 * le, rel=0.01), (solver, ff)
 
 
 CORNELL = "examples/path/cornell.yaml"

@@ -17,6 +17,7 @@ import numpy as np
 
 from .. import config
 from .formfactor import patch_ff, polygon_point, visibility
+from .hemicube import hemicube_form_factors
 from .camera import camera_ray
 from .illumination import sample_light
 from .optics import reflect, refract, schlick
@@ -428,3 +429,25 @@ def trace_two_pass(sa, tri_face, faces, face_element, element_face0, element_fac
             out[y, x, 1] = g_sum * inv
             out[y, x, 2] = b_sum * inv
         rays_out[y] = rays
+
+
+@njit
+def hemicube_shot(x, n, phi, verts, polys, poly_normal, side_patch, dF, near, scratch, ff, area_j, d0, d1, d2,
+                  recv_area, recv_rho, radiance, unshot):
+    """A progressive shot through a hemicube at the shooter (Cohen et al. 1988): the hemicube at x (the shooting
+    patch's lifted centre, unit normal n, turned by phi) over the receivers' polygons gives F_j→i for every
+    receiver i, reciprocity F_ij = F_ji·A_j/A_i, and each receiver gains ρ_i·F_ij·ΔL_j; `ff` is a float64
+    (n_recv,) work array."""
+    ff[:] = 0.0
+    hemicube_form_factors(x, n, phi, -1, verts, polys, poly_normal, side_patch, dF, near, scratch, ff)
+    for i in range(ff.shape[0]):
+        f = ff[i]
+        if f == 0.0:
+            continue
+        g = f * area_j / recv_area[i]
+        radiance[i, 0] += recv_rho[i, 0] * g * d0
+        radiance[i, 1] += recv_rho[i, 1] * g * d1
+        radiance[i, 2] += recv_rho[i, 2] * g * d2
+        unshot[i, 0] += recv_rho[i, 0] * g * d0
+        unshot[i, 1] += recv_rho[i, 1] * g * d1
+        unshot[i, 2] += recv_rho[i, 2] * g * d2

@@ -8,7 +8,9 @@ The pipeline, each stage one parallel loop over flat arrays:
 2. `bin_prims` — each polygon clipped against the near plane (only the ones that cross it are clipped), culled
    if it faces away (optional), and given the range of pixel rows whose sample points it may cover; prims are
    then sorted into bands of `BAND` rows (`fill_bins`), in their original order within a band.
-3. `raster_bands` — one band per task: for every polygon of the band, the classic scan-line algorithm. An edge
+3. `raster_bands` — one band per task: for every polygon of the band, the classic scan-line algorithm
+   (`setup_edges`, `first_covered_row`, `fill_polygon`: one polygon's scan conversion, which the hemicube of
+   `kernels.hemicube` calls too). An edge
    table of its non-horizontal edges; for each scan line, the active edges (top <= y < bottom) give crossings
    (x by direct evaluation from the edge's end points, so two polygons sharing an edge compute the same x
    bit for bit, and depth/attributes stepped incrementally down each edge); crossings sorted by x, spans filled
@@ -28,7 +30,7 @@ import math
 
 import numpy as np
 
-from .jit import njit, njit_alloc, njit_parallel, prange
+from .jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from .layout import CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
 
 #: Rows per band: the unit of parallel work in the raster pass.
@@ -237,11 +239,7 @@ def raster_bands(bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, 
 @njit_alloc
 def raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
                 width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count):
-    """Scan-convert every polygon binned to one band of rows, in order (the same result on any thread).
-
-    One function on purpose: Numba passes each array argument of a call as a dozen scalars and counts its
-    references atomically, which cost more than the scan conversion of a small polygon itself (measured: the pass
-    ran 4× slower with the per-polygon work in helper functions)."""
+    """Scan-convert every polygon binned to one band of rows, in order (the same result on any thread)."""
     K = attrs.shape[1]
     KF = K + 2
     y0 = band * BAND
@@ -251,17 +249,11 @@ def raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, at
     src = np.empty((MAX_VERTS, 2), np.int64)
     tmp_c = np.empty((MAX_VERTS, 5))
     F = np.empty((MAX_VERTS, KF))
-    e_top = np.empty(MAX_VERTS)
-    e_bot = np.empty(MAX_VERTS)
-    e_x = np.empty(MAX_VERTS)
-    e_dx = np.empty(MAX_VERTS)
-    e_v = np.empty((MAX_VERTS, 2), np.int64)
-    e_row = np.empty(MAX_VERTS, np.int64)
-    e_F = np.empty((MAX_VERTS, KF))
-    e_dF = np.empty((MAX_VERTS, KF))
-    xs = np.empty(MAX_VERTS)
-    xF = np.empty((2, KF))
-    order = np.empty(MAX_VERTS, np.int64)
+    # the layout of `edge_scratch`, allocated here rather than returned by it: the pass ran 3-5% faster so
+    edges = (np.empty(MAX_VERTS), np.empty(MAX_VERTS), np.empty(MAX_VERTS), np.empty(MAX_VERTS),
+             np.empty((MAX_VERTS, 2), np.int64), np.empty(MAX_VERTS, np.int64),
+             np.empty((MAX_VERTS, KF)), np.empty((MAX_VERTS, KF)),
+             np.empty(MAX_VERTS), np.empty(MAX_VERTS, np.int64), np.empty((2, KF)))
     if mode == MODE_DEPTH:  # clear this band's rows of the buffers (here, so that clearing runs in parallel)
         for r in range(y0, y1):
             for c in range(width):
@@ -283,95 +275,184 @@ def raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, at
                 clipped = True
         if clipped:
             n = clip_polygon(prim, prim_start, prim_index, clip, near, ortho, width, height, px, py, src, tmp_c)
-        # the edge table: non-horizontal edges, each from its top (smaller y) end point to its bottom one
-        ne = 0
-        for i in range(n):
-            j = i + 1 if i + 1 < n else 0
-            if py[i] == py[j]:
+        ne = setup_edges(n, px, py, edges)
+        if mode == MODE_COUNT:
+            count_polygon(ne, edges, r0, r1, width, jx, jy, count)
+            continue
+        r, nx = first_covered_row(ne, edges, r0, r1, width, jx, jy)
+        if r >= r1:
+            continue  # most small polygons cover no sample: their attributes are never set up
+        # depth key, q and A·q at the vertices (q = 1/W, or 1 without perspective correction)
+        if clipped:
+            clipped_attributes(n, src, tmp_c, attrs, ortho, persp, width, height, F)
+        else:
+            for i in range(n):
+                v = prim_index[start + i]
+                q = screen[v, 3] if persp else 1.0
+                F[i, 0] = screen[v, 2]
+                F[i, 1] = q
+                for a in range(K):
+                    F[i, 2 + a] = attrs[v, a] * q
+        fill_polygon(ne, edges, nx, F, r, r1, width, jx, jy, prim, zbuf, ids, gbuf)
+
+
+# ------------------------------------------------------------------ the scan conversion of one polygon
+# Shared by `raster_band` and the hemicube (`kernels.hemicube`); each step one function, inlined (LLVM
+# alwaysinline, no runtime): a call that is not inlined passes each array as a dozen scalars and, with the
+# runtime, counts its references, which costs more than the scan conversion of a small polygon itself (the pass
+# once ran 4x slower with its per-polygon work in ordinary helper functions). A caller runs setup_edges, then
+# first_covered_row, sets the vertex values F up only if the polygon covers a sample, then fill_polygon.
+
+
+@njit_alloc
+def edge_scratch(kf):
+    """Working arrays of the scan converter for polygons of up to MAX_VERTS vertices and `kf` values per vertex
+    (the depth key, q, then the attributes times q): the `edges` tuple of `setup_edges`, `first_covered_row`,
+    `count_polygon` and `fill_polygon`. Per edge: top y, bottom y, x at the top, dx/dy (float64 (MAX_VERTS,)
+    each), its top and bottom vertex (int64 (MAX_VERTS, 2)), the last row its values were set for (int64
+    (MAX_VERTS,)), those values and their steps per row (float64 (MAX_VERTS, kf) each); per scan line the
+    crossings' x and edges (float64 and int64 (MAX_VERTS,)); along a span the values and their steps per pixel
+    (float64 (2, kf))."""
+    return (np.empty(MAX_VERTS), np.empty(MAX_VERTS), np.empty(MAX_VERTS), np.empty(MAX_VERTS),
+            np.empty((MAX_VERTS, 2), np.int64), np.empty(MAX_VERTS, np.int64),
+            np.empty((MAX_VERTS, kf)), np.empty((MAX_VERTS, kf)),
+            np.empty(MAX_VERTS), np.empty(MAX_VERTS, np.int64), np.empty((2, kf)))
+
+
+@njit_inline
+def setup_edges(n, px, py, edges):
+    """The edge table of the polygon px[:n], py[:n] (pixels): its non-horizontal edges, each from its top
+    (smaller y) end point to its bottom one. Returns the edge count."""
+    e_top, e_bot, e_x, e_dx, e_v, e_row, _, _, _, _, _ = edges
+    ne = 0
+    for i in range(n):
+        j = i + 1 if i + 1 < n else 0
+        if py[i] == py[j]:
+            continue
+        top, bot = (i, j) if py[i] < py[j] else (j, i)
+        e_top[ne] = py[top]
+        e_bot[ne] = py[bot]
+        e_x[ne] = px[top]
+        e_dx[ne] = (px[bot] - px[top]) / (py[bot] - py[top])
+        e_v[ne, 0] = top
+        e_v[ne, 1] = bot
+        e_row[ne] = -2
+        ne += 1
+    return ne
+
+
+@njit_inline
+def row_crossings(ne, edges, yc):
+    """The active edges at scan line y = yc (top <= yc < bottom) and their crossings, sorted by x into the
+    `edges` tuple's crossing arrays (insertion sort: two for a triangle). x is evaluated directly from the edge's
+    end points, so two polygons sharing an edge compute the same x bit for bit. Returns the crossing count."""
+    e_top, e_bot, e_x, e_dx, _, _, _, _, xs, order, _ = edges
+    nx = 0
+    for e in range(ne):
+        if e_top[e] <= yc < e_bot[e]:
+            xv = e_x[e] + (yc - e_top[e]) * e_dx[e]
+            j = nx - 1
+            while j >= 0 and xs[j] > xv:
+                xs[j + 1] = xs[j]
+                order[j + 1] = order[j]
+                j -= 1
+            xs[j + 1] = xv
+            order[j + 1] = e
+            nx += 1
+    return nx
+
+
+@njit_inline
+def span_columns(xl, xr, width, jx):
+    """Columns [c0, c1) whose sample points (x = c + jx) lie in the span xl <= x < xr, within [0, width)."""
+    c0 = max(0, int(math.ceil(xl - jx)))
+    c1 = min(width, int(math.ceil(xr - jx)))
+    return c0, c1
+
+
+@njit_inline
+def first_covered_row(ne, edges, r0, r1, width, jx, jy):
+    """(r, nx): the first row in [r0, r1) where the polygon covers a sample (spans between pairs of crossings,
+    even-odd) and its crossing count, its crossings left in `edges` for `fill_polygon` to start from; (r1, 0)
+    when it covers none."""
+    xs = edges[8]
+    for r in range(r0, r1):
+        nx = row_crossings(ne, edges, r + jy)
+        for s in range(0, nx - 1, 2):
+            c0, c1 = span_columns(xs[s], xs[s + 1], width, jx)
+            if c1 > c0:
+                return r, nx
+    return r1, 0
+
+
+@njit_inline
+def count_polygon(ne, edges, r0, r1, width, jx, jy, count):
+    """count[r, c] += 1 at every sample of rows [r0, r1) the polygon covers (no depth test)."""
+    xs = edges[8]
+    for r in range(r0, r1):
+        nx = row_crossings(ne, edges, r + jy)
+        for s in range(0, nx - 1, 2):
+            c0, c1 = span_columns(xs[s], xs[s + 1], width, jx)
+            for c in range(c0, c1):
+                count[r, c] += 1
+
+
+@njit_inline
+def fill_polygon(ne, edges, nx0, F, r0, r1, width, jx, jy, item, zbuf, ids, gbuf):
+    """The z-buffer pass of one polygon over rows [r0, r1): where its depth key is larger (nearer) than
+    zbuf[r, c], zbuf[r, c] = key, ids[r, c] = item and gbuf[r, c, a] = (A·q)/q for the F.shape[1] - 2 attributes.
+    The crossings of row r0 must be in `edges` already, nx0 of them, as `first_covered_row` leaves them.
+
+    F float64 (>= n, KF): (key, q, A·q) at the polygon's vertices, all linear in screen space; each is stepped
+    incrementally down each edge and along each span. zbuf float64 (H, W), ids int32 (H, W), gbuf float32
+    (H, W, KF - 2) with H >= r1."""
+    e_top, e_bot, _, _, e_v, e_row, e_F, e_dF, xs, order, xF = edges
+    KF = F.shape[1]
+    K = KF - 2
+    nx = nx0
+    for r in range(r0, r1):
+        yc = r + jy
+        if r > r0:
+            nx = row_crossings(ne, edges, yc)
+        for s in range(0, nx - 1, 2):
+            xl = xs[s]
+            xr = xs[s + 1]
+            c0, c1 = span_columns(xl, xr, width, jx)
+            if c1 <= c0:
                 continue
-            top, bot = (i, j) if py[i] < py[j] else (j, i)
-            e_top[ne] = py[top]
-            e_bot[ne] = py[bot]
-            e_x[ne] = px[top]
-            e_dx[ne] = (px[bot] - px[top]) / (py[bot] - py[top])
-            e_v[ne, 0] = top
-            e_v[ne, 1] = bot
-            e_row[ne] = -2
-            ne += 1
-        ready = False  # attributes are set up at the first covered sample (most small polygons cover none)
-        for r in range(r0, r1):
-            yc = r + jy
-            # the active edges at this scan line, their crossings sorted by x (insertion sort: two for a triangle)
-            nx = 0
-            for e in range(ne):
-                if e_top[e] <= yc < e_bot[e]:
-                    xv = e_x[e] + (yc - e_top[e]) * e_dx[e]
-                    j = nx - 1
-                    while j >= 0 and xs[j] > xv:
-                        xs[j + 1] = xs[j]
-                        order[j + 1] = order[j]
-                        j -= 1
-                    xs[j + 1] = xv
-                    order[j + 1] = e
-                    nx += 1
-            # spans between pairs of crossings (even-odd)
-            for s in range(0, nx - 1, 2):
-                xl = xs[s]
-                xr = xs[s + 1]
-                c0 = max(0, int(math.ceil(xl - jx)))
-                c1 = min(width, int(math.ceil(xr - jx)))
-                if c1 <= c0:
-                    continue
-                if mode == MODE_COUNT:
-                    for c in range(c0, c1):
-                        count[r, c] += 1
-                    continue
-                if not ready:
-                    # depth key, q and A·q at the vertices (q = 1/W, or 1 without perspective correction)...
-                    if clipped:
-                        clipped_attributes(n, src, tmp_c, attrs, ortho, persp, width, height, F)
-                    else:
-                        for i in range(n):
-                            v = prim_index[start + i]
-                            q = screen[v, 3] if persp else 1.0
-                            F[i, 0] = screen[v, 2]
-                            F[i, 1] = q
-                            for a in range(K):
-                                F[i, 2 + a] = attrs[v, a] * q
-                    # ...and their steps per scan line down each edge
-                    for e in range(ne):
-                        inv_dy = 1.0 / (e_bot[e] - e_top[e])
-                        for a in range(KF):
-                            e_dF[e, a] = (F[e_v[e, 1], a] - F[e_v[e, 0], a]) * inv_dy
-                    ready = True
-                # each edge's attributes at this scan line: one step from the last, or evaluated where it starts
-                for side in range(2):
-                    e = order[s + side]
-                    if e_row[e] == r - 1:
-                        for a in range(KF):
-                            e_F[e, a] += e_dF[e, a]
-                    elif e_row[e] != r:
-                        dy = yc - e_top[e]
-                        top = e_v[e, 0]
-                        for a in range(KF):
-                            e_F[e, a] = F[top, a] + dy * e_dF[e, a]
-                    e_row[e] = r
-                # along the span: start at the first sample, then one step per pixel
-                el = order[s]
-                er = order[s + 1]
-                inv_dx = 1.0 / (xr - xl)
-                off = c0 + jx - xl
-                for a in range(KF):
-                    d = (e_F[er, a] - e_F[el, a]) * inv_dx
-                    xF[1, a] = d
-                    xF[0, a] = e_F[el, a] + off * d
-                for c in range(c0, c1):
-                    key = xF[0, 0]
-                    if key > zbuf[r, c]:
-                        zbuf[r, c] = key
-                        ids[r, c] = prim
-                        inv_q = 1.0 / xF[0, 1]
-                        for a in range(K):
-                            gbuf[r, c, a] = xF[0, 2 + a] * inv_q
+            # each edge's values at this scan line: one step from the last, or evaluated where it starts
+            for side in range(2):
+                e = order[s + side]
+                if e_row[e] == r - 1:
                     for a in range(KF):
-                        xF[0, a] += xF[1, a]
+                        e_F[e, a] += e_dF[e, a]
+                elif e_row[e] != r:
+                    top = e_v[e, 0]
+                    if e_row[e] == -2:  # the edge's first use: its steps per scan line (an edge may never be used)
+                        inv_dy = 1.0 / (e_bot[e] - e_top[e])
+                        bot = e_v[e, 1]
+                        for a in range(KF):
+                            e_dF[e, a] = (F[bot, a] - F[top, a]) * inv_dy
+                    dy = yc - e_top[e]
+                    for a in range(KF):
+                        e_F[e, a] = F[top, a] + dy * e_dF[e, a]
+                e_row[e] = r
+            # along the span: start at the first sample, then one step per pixel
+            el = order[s]
+            er = order[s + 1]
+            inv_dx = 1.0 / (xr - xl)
+            off = c0 + jx - xl
+            for a in range(KF):
+                d = (e_F[er, a] - e_F[el, a]) * inv_dx
+                xF[1, a] = d
+                xF[0, a] = e_F[el, a] + off * d
+            for c in range(c0, c1):
+                key = xF[0, 0]
+                if key > zbuf[r, c]:
+                    zbuf[r, c] = key
+                    ids[r, c] = item
+                    inv_q = 1.0 / xF[0, 1]
+                    for a in range(K):
+                        gbuf[r, c, a] = xF[0, 2 + a] * inv_q
+                for a in range(KF):
+                    xF[0, a] += xF[1, a]

@@ -102,7 +102,7 @@ def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
     for level_index in range(levels + 1):
         recv = src if level_index == 0 else patch_arrays(elements)
         bvh, tri_poly = patch_bvh(elements)
-        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly)
+        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly, patches, elements)
         t1 = time.perf_counter()
         sent, r = _first_light(compiled, recv, bvh, rs, settings.seed)
         direct_s += time.perf_counter() - t1

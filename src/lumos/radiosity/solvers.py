@@ -67,6 +67,8 @@ class Level:
     recv_patch: np.ndarray  # int64 (n_elements,): the patch each element belongs to
     bvh: object  # CompiledScene of the elements' polygons
     tri_poly: np.ndarray  # int32 (m,): the element polygon of each BVH triangle
+    src_patches: object = None  # radiosity.patches.Patches of the patches (the hemicube renders their polygons)
+    recv_patches: object = None  # and of the elements
 
     def patch_means(self, values: np.ndarray) -> np.ndarray:
         """The area-weighted mean of `values` (n_elements, 3) over each patch's elements: (n_patches, 3)."""
