@@ -109,7 +109,8 @@ def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed,
     with unshot radiance `unshot_of` (m, 3): every receiving element i of `recv` (whose patch, `recv_patch[i]`,
     is not the shooter) gets ρ_i·F_ij·ΔL_j from each, F_ij by ray casting (`_gather_ff`), added to `radiance` and
     `unshot` (n_recv, 3). `shot` numbers the first shooter (random streams). A receiver whose share of a shot
-    would stay below `threshold` (radiance, unoccluded) takes one shadow ray instead of `samples`."""
+    would stay below `threshold` (radiance, unoccluded) takes it only with probability share/threshold, weighted
+    by the inverse, and then with one shadow ray instead of `samples`."""
     n = recv.area.shape[0]
     m = shooters.shape[0]
     for c in prange((n + _CHUNK - 1) // _CHUNK):
@@ -134,8 +135,18 @@ def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed,
                 f = patch_ff(x, n_i, src.corners[j], src.k[j], src.area[j], cj, nj, scratch)
                 if f == 0.0:
                     continue
-                k = samples if f * rmax * max(d0, d1, d2) >= threshold else 1
-                v, r = visibility(geo, x, n_i, src.corners[j], src.k[j], nj, k, sample_key(seed, i, shot + q), stack)
+                share = f * rmax * max(d0, d1, d2)
+                key = sample_key(seed, i, shot + q)
+                k = samples
+                if share < threshold:
+                    # a faint share: one shadow ray, and only with probability share/threshold (weighted by
+                    # its inverse: Russian roulette, unbiased), so that dim shots cost few rays
+                    keep = share / threshold
+                    if rand_key(key, 1 << 20) >= keep:
+                        continue
+                    f /= keep
+                    k = 1
+                v, r = visibility(geo, x, n_i, src.corners[j], src.k[j], nj, k, key, stack)
                 f *= v
                 rays += r
                 radiance[i, 0] += rho[0] * f * d0

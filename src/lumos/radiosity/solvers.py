@@ -35,8 +35,9 @@ AUTO_PROGRESSIVE_MAX = 20_000
 #: Full-matrix solvers refuse scenes whose float32 matrix would take more than this share of free memory.
 MATRIX_MEMORY_SHARE = 0.5
 #: Progressive: a receiver whose share of a shot, unoccluded, would stay below this fraction of the scene's
-#: brightest emitter takes one shadow ray for its visibility instead of `visibility_samples` (skipping it would
-#: lose light: small shooters of a finely meshed scene are each below any fixed threshold, not in sum).
+#: brightest emitter receives it by Russian roulette (with probability share/threshold, weighted by the
+#: inverse, and one shadow ray): unbiased, and dim shots of a finely meshed scene cost few rays (skipping them
+#: outright would lose light: each is below any fixed threshold, not their sum).
 SHOT_THRESHOLD = 1e-5
 #: Progressive: patches shot together in one pass over the receivers (fewer passes, the same light), those
 #: with at least this share of the brightest one's unshot power.
