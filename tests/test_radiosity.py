@@ -372,3 +372,18 @@ def test_adaptive_subdivision_refines_where_the_radiance_varies():
             assert sol.n_elements > sol.stats["patches"]
             assert sol.element_patch.max() == sol.stats["patches"] - 1
     assert errors[True] < 0.8 * errors[False], errors
+
+
+def test_a_mesh_file_scene_solves_and_draws(tmp_path):
+    """A scene with a mesh from a file (NumPy arrays in the scene model) and an infinite plane (clipped to the
+    bounds) under a point light."""
+    from pathlib import Path
+
+    scene = {"camera": {"position": [0, 0.15, 0.4], "look_at": [0, 0.08, 0], "fov": 40},
+             "lights": [{"type": "point", "position": [0.2, 0.5, 0.3], "intensity": 0.2, "attenuation": [0, 0, 1]}],
+             "objects": [{"type": "plane", "point": [0, 0.033, 0], "material": {"kd": 0.6}},
+                         {"type": "mesh", "file": str(Path(__file__).parent / "data" / "bunny_res4.ply"),
+                          "material": {"kd": 0.8}}]}
+    img = lumos.render(scene, method="radiosity", width=32, height=24, radiosity={"patch_size": 0.02})
+    assert np.all(np.isfinite(img.array)) and img.array.mean() > 0.01
+    assert img.stats["radiosity"]["patches"] > 100

@@ -87,10 +87,35 @@ def direct_light(sa, lights_sa, pa, samples, seed, out, rays_out):
         rays_out[c] = rays
 
 
+#: A receiver larger than the shooter and closer to it than this many times its own size (squared: times its
+#: area) takes the form factor of a shot as the mean over 3×3 points of it, not at its centre alone: a large
+#: receiver beside a small shooter (neighbouring triangles at a crease of a mesh) otherwise takes far more
+#: than the shooter sends.
+_NEAR_RECEIVER = 4.0
+
+
+@njit_inline
+def _receiver_ff(recv, i, x, n_i, src, j, cj, nj, scratch):
+    """F from receiving element i (its lifted centre x, normal n_i) to shooting patch j, unoccluded."""
+    dx, dy, dz = cj[0] - x[0], cj[1] - x[1], cj[2] - x[2]
+    if recv.area[i] <= 2.0 * src.area[j] or dx * dx + dy * dy + dz * dz > _NEAR_RECEIVER * recv.area[i]:
+        return patch_ff(x, n_i, src.corners[j], src.k[j], src.area[j], cj, nj, scratch)
+    lift = x[0] - recv.centre[i, 0], x[1] - recv.centre[i, 1], x[2] - recv.centre[i, 2]
+    total = 0.0
+    for a in range(3):
+        for b in range(3):
+            p = polygon_point(recv.corners[i], recv.k[i], (a + 0.5) / 3.0, (b + 0.5) / 3.0)
+            y = (p[0] + lift[0], p[1] + lift[1], p[2] + lift[2])
+            if nj[0] * (y[0] - cj[0]) + nj[1] * (y[1] - cj[1]) + nj[2] * (y[2] - cj[2]) > 0.0:
+                total += patch_ff(y, n_i, src.corners[j], src.k[j], src.area[j], cj, nj, scratch)
+    return total / 9.0
+
+
 @njit_inline
 def _gather_ff(geo, src, j, x, n_i, samples, key, stack, scratch):
     """F from the (lifted) receiver point x with normal n_i to shooting patch j of `src`, with occlusion: the
-    contour form factor times the visibility of j from x; (F, rays). 0 when j's sending side faces away."""
+    contour form factor times the visibility of j from x; (F, rays). 0 when j's sending side faces away. (At
+    the receiver's centre: a row of these sums to exactly 1 in a closed scene, whatever the patch sizes.)"""
     cj = src.centre[j]
     nj = (src.normal[j, 0], src.normal[j, 1], src.normal[j, 2])
     if nj[0] * (x[0] - cj[0]) + nj[1] * (x[1] - cj[1]) + nj[2] * (x[2] - cj[2]) <= 0.0:
@@ -103,12 +128,11 @@ def _gather_ff(geo, src, j, x, n_i, samples, key, stack, scratch):
 
 
 @njit_parallel
-def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, radiance, unshot,
-                  rays_out):
+def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, ff, rays_out):
     """Progressive-refinement shots (Cohen et al. 1988) from the patches `shooters` (int64 (m,), rows of `src`)
     with unshot radiance `unshot_of` (m, 3): every receiving element i of `recv` (whose patch, `recv_patch[i]`,
-    is not the shooter) gets ρ_i·F_ij·ΔL_j from each, F_ij by ray casting (`_gather_ff`), added to `radiance` and
-    `unshot` (n_recv, 3). `shot` numbers the first shooter (random streams). A receiver whose share of a shot
+    is not the shooter) gets ρ_i·F_ij·ΔL_j from each, F_ij by ray casting written to ff[i, q] (float64 (n_recv, m);
+    the caller normalises and applies them). `shot` numbers the first shooter (random streams). A receiver whose share of a shot
     would stay below `threshold` (radiance, unoccluded) takes it only with probability share/threshold, weighted
     by the inverse, and then with one shadow ray instead of `samples`."""
     n = recv.area.shape[0]
@@ -118,6 +142,8 @@ def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed,
         stack, stack_t, scratch = _scratch()
         rays = 0
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
+            for q in range(m):
+                ff[i, q] = 0.0
             rho = recv.rho[i]
             rmax = max(rho[0], rho[1], rho[2])
             if rmax <= 0.0:
@@ -132,7 +158,7 @@ def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed,
                 if nj[0] * (x[0] - cj[0]) + nj[1] * (x[1] - cj[1]) + nj[2] * (x[2] - cj[2]) <= 0.0:
                     continue  # j sends its light the other way
                 d0, d1, d2 = unshot_of[q, 0], unshot_of[q, 1], unshot_of[q, 2]
-                f = patch_ff(x, n_i, src.corners[j], src.k[j], src.area[j], cj, nj, scratch)
+                f = _receiver_ff(recv, i, x, n_i, src, j, cj, nj, scratch)
                 if f == 0.0:
                     continue
                 share = f * rmax * max(d0, d1, d2)
@@ -147,14 +173,8 @@ def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed,
                     f /= keep
                     k = 1
                 v, r = visibility(geo, x, n_i, src.corners[j], src.k[j], nj, k, key, stack)
-                f *= v
+                ff[i, q] = f * v
                 rays += r
-                radiance[i, 0] += rho[0] * f * d0
-                radiance[i, 1] += rho[1] * f * d1
-                radiance[i, 2] += rho[2] * f * d2
-                unshot[i, 0] += rho[0] * f * d0
-                unshot[i, 1] += rho[1] * f * d1
-                unshot[i, 2] += rho[2] * f * d2
         rays_out[c] += rays
 
 

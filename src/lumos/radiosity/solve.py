@@ -62,12 +62,14 @@ def patch_bvh(p: Patches):
 def scene_digest(scene) -> str:
     """A fingerprint of what a solution depends on: the objects, lights and materials (not the camera, the
     image size or the display settings, so a saved solution renders any view)."""
-    data = scene.model_dump(mode="json", exclude={"camera", "render"}, warnings=False)
-    for obj in data.get("objects", []):  # inline mesh arrays: hash their bytes
-        for key in ("vertices", "faces", "normals", "uvs"):
-            if isinstance(obj.get(key), (list, tuple)) and len(obj[key]) > 64:
-                obj[key] = hashlib.sha1(np.asarray(obj[key]).tobytes()).hexdigest()
-    return hashlib.sha1(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
+    data = scene.model_dump(exclude={"camera", "render"}, warnings=False)
+
+    def encode(value):  # mesh arrays (from files or inline) by their bytes; paths and the rest as text
+        if isinstance(value, np.ndarray):
+            return hashlib.sha1(np.ascontiguousarray(value).tobytes()).hexdigest() + str(value.shape)
+        return str(value)
+
+    return hashlib.sha1(json.dumps(data, sort_keys=True, default=encode).encode()).hexdigest()
 
 
 def solve(scene, settings, progress: Optional[Callable[[float], None]] = None,

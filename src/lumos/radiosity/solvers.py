@@ -218,8 +218,13 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
             for q, j in enumerate(top):
                 hemi.shoot(int(j), d[q], shots + q, radiance, unshot_e)
         else:
+            ff = np.empty((len(recv.area), len(top)))
             shoot_raycast(level.bvh.arrays, recv, src, level.recv_patch, top, d, np.int64(rs.visibility_samples),
-                          np.int64(seed), np.int64(shots), threshold, radiance, unshot_e, rays)
+                          np.int64(seed), np.int64(shots), threshold, ff, rays)
+            got = _conserving(ff, recv.area, area[top]) @ d
+            got *= recv.rho
+            radiance += got
+            unshot_e += got
         ff_s += time.perf_counter() - t0
         shots += len(top)
         if progress is not None:
@@ -230,6 +235,26 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
     residual = float((_lum(unshot_e) * recv.area).sum()) / total
     radiance = radiance + ambient_term(recv, unshot_e)
     return Result(radiance, shots, residual, int(rays.sum()), ff_s)
+
+
+#: How far a shot's receivers may, by their form-factor estimates, take more than the shooter sends before the
+#: shot is scaled down (`_conserving`): the centre estimates' own error where equal patches meet at a corner
+#: is within it, and a shot that sends at most this much over ρ < 1 still converges.
+SHOT_SLACK = 0.05
+
+
+def _conserving(ff: np.ndarray, recv_area: np.ndarray, src_area: np.ndarray) -> np.ndarray:
+    """The shot's form factors F_ij (receiver i, shooter q), scaled per shooter where needed so that what its
+    receivers take, Σ_i A_i·F_ij = A_j·Σ_i F_ji, is at most (1 + SHOT_SLACK)·A_j: with exact form factors it
+    is at most A_j, but a form factor taken at a receiver's centre overestimates what a large receiver close
+    to a small shooter takes (neighbouring triangles of a mesh at a crease), and a shot that sends more
+    power than it has makes progressive refinement diverge."""
+    sent = recv_area @ ff
+    bound = (1.0 + SHOT_SLACK) * src_area
+    over = sent > bound
+    if over.any():
+        ff[:, over] *= bound[over] / sent[over]
+    return ff
 
 
 def ambient_term(pa, unshot: np.ndarray) -> np.ndarray:
