@@ -332,6 +332,34 @@ def smooth_corners(order, starts, normals, weights, values, cos_limit, out):
             out[i, 2] = s2 / wsum
 
 
+@njit
+def gradient_moments(order, starts, owner, normals, centres, values, cos_limit, a_out, b_out):
+    """The least-squares moments of each patch's radiance gradient from its neighbours (the patches it shares
+    a corner bucket with, turned within the angle): a_out[p] += d·dᵀ and b_out[p] += d ⊗ (L_q − L_p) over them,
+    d = c_q − c_p (a_out (n, 3, 3), b_out (n, 3, 3): row = direction component, column = channel)."""
+    for b in range(starts.shape[0] - 1):
+        lo, hi = starts[b], starts[b + 1]
+        for x in range(lo, hi):
+            i = order[x]
+            p = owner[i]
+            for y in range(lo, hi):
+                j = order[y]
+                q = owner[j]
+                if q == p:
+                    continue
+                if normals[i, 0] * normals[j, 0] + normals[i, 1] * normals[j, 1] + normals[i, 2] * normals[j, 2] \
+                        < cos_limit:
+                    continue
+                d0 = centres[q, 0] - centres[p, 0]
+                d1 = centres[q, 1] - centres[p, 1]
+                d2 = centres[q, 2] - centres[p, 2]
+                d = (d0, d1, d2)
+                for r in range(3):
+                    for c in range(3):
+                        a_out[p, r, c] += d[r] * d[c]
+                        b_out[p, r, c] += d[r] * (values[q, c] - values[p, c])
+
+
 # --------------------------------------------------------------------------------------------- two-pass display
 
 

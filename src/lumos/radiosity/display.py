@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels.radiosity import smooth_corners
+from ..kernels.radiosity import gradient_moments, smooth_corners
 from .patches import SMOOTH_COS
 
 
@@ -34,6 +34,39 @@ def corner_buckets(patches, pa):
     return owner, starts, order.astype(np.int64)
 
 
+#: Corners take each patch's radiance carried to them along its gradient (`extrapolated`), not its centre value.
+EXTRAPOLATE = True
+
+
+def extrapolated(pa, radiance, owner, starts, order, vertices):
+    """Each patch's radiance at each of its corners, L_p + ∇L_p·(v − c_p), the gradient fitted by least squares
+    to the neighbouring patches' centres on the same surface. Where patches meet all round a corner, the
+    gradients of the patches around it cancel in the mean and the corner takes about the plain average; at a
+    surface's edge (a box's crease, a wall's end), where the plain average can only repeat the edge patches'
+    own centre values, the corner takes the trend instead: the darkening into a room's corners and the fall of
+    light along a wall, which the patch centres alone put half a patch too far in. Kept within 0 and twice the
+    brightest neighbour's radiance (a limiter: a shadow boundary's steep gradient does not overshoot)."""
+    n = len(pa.area)
+    a = np.zeros((n, 3, 3))
+    b = np.zeros((n, 3, 3))
+    normals = pa.normal[owner]
+    gradient_moments(order, starts, owner.astype(np.int64), normals, pa.centre, radiance, SMOOTH_COS, a, b)
+    # the gradient lies in the patch's plane: regularise the normal direction (and a lone patch) away
+    scale = np.maximum(np.trace(a, axis1=1, axis2=2), 1e-30)
+    a += scale[:, None, None] * pa.normal[:, :, None] * pa.normal[:, None, :]
+    a += 1e-6 * scale[:, None, None] * np.eye(3)
+    grad = np.linalg.solve(a, b)  # (n, 3 directions, 3 channels)
+    offset = vertices - pa.centre[owner]
+    value = radiance[owner] + np.einsum("md,mdc->mc", offset, grad[owner])
+    # the limiter's bound: the brightest patch meeting each corner's bucket
+    top = np.zeros((len(starts) - 1, 3))
+    bucket = np.repeat(np.arange(len(starts) - 1), np.diff(starts))
+    np.maximum.at(top, bucket, radiance[owner[order]])
+    bound = np.empty_like(value)
+    bound[order] = top[bucket]
+    return np.clip(value, 0.0, 2.0 * bound)
+
+
 def display_mesh(patches, pa, radiance):
     """The display mesh: one vertex per patch corner, with its smoothed radiance; triangles wound about their
     patch's normal. Returns (vertices (m, 3), normals (m, 3), radiance (m, 3) float64, faces (f, 3) int32,
@@ -46,7 +79,8 @@ def display_mesh(patches, pa, radiance):
     owner, starts, order = corner_buckets(patches, pa)
     normals = pa.normal[owner]
     values = np.empty((len(vertices), 3))
-    smooth_corners(order, starts, normals, pa.area[owner], radiance[owner], SMOOTH_COS, values)
+    at_corner = extrapolated(pa, radiance, owner, starts, order, vertices) if EXTRAPOLATE else radiance[owner]
+    smooth_corners(order, starts, normals, pa.area[owner], at_corner, SMOOTH_COS, values)
     # triangles: (0, 1, 2) of each patch and (0, 2, 3) of each quad
     first = np.concatenate([[0], np.cumsum(k)[:-1]])
     tris = [np.column_stack([first, first + 1, first + 2])]
