@@ -433,3 +433,40 @@ def test_the_display_carries_a_linear_radiance_to_the_edges_exactly():
     finally:
         display.EXTRAPOLATE = True
     assert np.abs(plain[top] - np.repeat(truth(vertices[top]), 3, axis=1)).max() > 0.02
+
+
+def test_a_solution_solved_from_outside_a_box_refuses_the_view_from_inside(tmp_path):
+    """A solid's inside is meshed only when the camera or a light is in it: a solution solved from outside
+    has no inside patches, so drawing it from inside must be refused, not drawn see-through."""
+    from lumos.errors import LumosError
+
+    box = {"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": {"kd": 0.5, "emission": 0.2}}
+    outside = {"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0]}, "objects": [box]}
+    inside = {"camera": {"position": [0, 0, 0.5], "look_at": [0, 0, -1]}, "objects": [box]}
+    sol = solve(outside, settings(patch_size=0.5))
+    sol.save(tmp_path / "out.npz")
+    view = dict(width=16, height=12, radiosity={"patch_size": 0.5})
+    assert lumos.render(outside, method="radiosity", solution=tmp_path / "out.npz", **view).array.mean() > 0
+    with pytest.raises(LumosError, match="different scene"):
+        lumos.render(inside, method="radiosity", solution=tmp_path / "out.npz", **view)
+    # what a solution does not depend on (background, ambient) does not refuse it
+    lumos.render(dict(outside, background=[0.1, 0.2, 0.3], ambient=[0.1, 0.1, 0.1]), method="radiosity",
+                 solution=tmp_path / "out.npz", **view)
+
+
+def test_cli_solve_checks_its_outputs_before_solving(tmp_path, capsys):
+    from lumos import cli
+
+    code = cli.main(["radiosity", "solve", CORNELL, "-o", str(tmp_path / "missing" / "box.npz")])
+    assert code == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_render_counts_the_solve_s_rays_and_takes_the_threads_asked_for():
+    import numba
+
+    img = lumos.render(CORNELL, method="radiosity", width=32, height=32, threads=1,
+                       radiosity={"patch_size": 0.4, "solver": "progressive"})
+    assert numba.get_num_threads() == 1
+    assert img.stats["rays"] >= img.stats["radiosity"]["rays"] > 0
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)

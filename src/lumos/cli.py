@@ -210,12 +210,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _radiosity_flags(group) -> None:
-    group.add_argument("--solver", metavar="S", help="gauss_seidel, jacobi, progressive (default) or stochastic")
+    group.add_argument("--solver", metavar="S", help="auto (default: progressive up to "
+                       "20,000 patches, stochastic beyond), gauss_seidel, jacobi, progressive or stochastic")
     group.add_argument("--form-factors", metavar="F", help="raycast (default) or hemicube")
     group.add_argument("--patch-size", type=float, metavar="X", help="largest patch edge, in scene units")
     group.add_argument("--tolerance", type=float, metavar="T", help="stop when the unshot power or a sweep's "
                        "change falls below this fraction (default 0.01)")
-    group.add_argument("--display", metavar="D", help="gouraud (default) or flat")
+    group.add_argument("--display", metavar="D", help="gouraud (default) or flat: how the solution is drawn "
+                       "(a solve only records it)")
 
 
 def _radiosity_overrides(args) -> dict:
@@ -235,6 +237,19 @@ def run_radiosity_solve(args: argparse.Namespace, started: float) -> int:
     for path in args.export or []:
         if Path(path).suffix.lower() not in FORMATS:
             raise LumosError(f"cannot export '{path}': the baked mesh is {' or '.join(FORMATS)}")
+    # the folders are checked before the solve, which may take minutes
+    for path, what in [(out, "solution")] + [(Path(p), "export") for p in args.export or []]:
+        if path is None:
+            continue
+        if path.is_dir():
+            raise LumosError(f"cannot write {what} '{path}': it is a directory")
+        folder = path.parent if str(path.parent) else Path(".")
+        if not folder.is_dir():
+            raise LumosError(f"cannot write {what} '{path}': folder '{folder}' does not exist")
+        if not os.access(folder, os.W_OK):
+            raise LumosError(f"cannot write {what} '{path}': folder '{folder}' is not writable")
+    if args.stats:
+        _check_stats_path(Path(args.stats))
     scene = load_scene(args.scene)
     overrides = {"method": "radiosity", "seed": args.seed, "threads": args.threads, **_radiosity_overrides(args)}
     cfg = api.resolve_settings(scene, overrides)

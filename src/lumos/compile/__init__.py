@@ -222,7 +222,9 @@ def compile_scene(scene, settings=None) -> CompiledScene:
         rs = settings.radiosity
         size = rs.patch_size if rs.patch_size is not None else default_patch_size(*usable_bounds(compiled.bounds))
         compiled.patches = mesh_scene(scene, compiled.bounds, size, settings.tessellation)
-        compiled.digest = scene_digest(scene)
+        p = compiled.patches
+        sides = np.unique(np.stack([p.object_id.astype(np.int64), np.sign(p.patch_side).astype(np.int64)]), axis=1)
+        compiled.digest = scene_digest(scene, sides)
     if settings is not None and settings.method == "path":
         from .emitters import build_emitters, physical_materials
 

@@ -21,19 +21,38 @@ from .common import Film
 from .raster import draw_colours
 
 
+#: The two-pass display's mirror and glass bounces when max_depth is -1 (unbounded): each costs one ray and
+#: takes kr or kt of what remains, so past this many the rest is below any display's precision.
+UNBOUNDED_DEPTH = 32
+
+
 def render_radiosity(compiled, camera, settings, progress=None, solution=None) -> Film:
     """Solve (or take `solution`: a `radiosity.Solution` or the path of a saved one) and draw it from `camera`."""
     from ..radiosity.solution import Solution
     from ..radiosity.solve import solve_compiled
+    from .common import set_threads
 
+    if settings.antialias == "adaptive":
+        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; radiosity takes none or "
+                         "supersample")
+    set_threads(settings.threads)  # the solve, too, runs on the threads asked for
+    solve_rays = 0
     if solution is None:
         solution = solve_compiled(compiled, settings)
+        solve_rays = int(solution.stats.get("rays", 0))
     elif isinstance(solution, (str, Path)):
         solution = Solution.load(solution, compiled.digest)
     elif solution.scene_digest and compiled.digest and solution.scene_digest != compiled.digest:
-        raise LumosError("radiosity: the solution was solved for another scene (its geometry, materials or lights "
+        raise LumosError("radiosity: the solution was solved for a different scene (its geometry, materials or lights "
                          "differ); solve this one again")
     if np.any(solution.element_optics[:, :6] > 0.0):
+        if settings.aov:
+            import warnings
+
+            from ..errors import LumosWarning
+
+            warnings.warn("radiosity: the two-pass display (mirrors and glass) gives no AOVs; "
+                          f"{', '.join(settings.aov)} not written", LumosWarning, stacklevel=2)
         film = _two_pass(solution, camera, settings, compiled.arrays.background, progress)
     else:
         face = solution.face_element
@@ -41,6 +60,7 @@ def render_radiosity(compiled, camera, settings, progress=None, solution=None) -
                             solution.element_radiance[face], solution.element_reflectance[face],
                             solution.element_object[face], camera, settings, compiled.arrays.background, progress)
     film.extra = {"radiosity": dict(solution.stats)}
+    film.rays += solve_rays  # the solve's shadow and visibility rays count as this render's rays
     return film
 
 
@@ -55,9 +75,6 @@ def _two_pass(solution, camera, settings, background, progress) -> Film:
     from .common import check_memory, set_threads
 
     width, height = settings.width, settings.height
-    if settings.antialias == "adaptive":
-        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; radiosity takes none or "
-                         "supersample")
     check_memory(width, height)
     threads = set_threads(settings.threads)
     faces = solution.faces
@@ -83,7 +100,7 @@ def _two_pass(solution, camera, settings, background, progress) -> Film:
     trace_two_pass(bvh.arrays, tri_face, np.ascontiguousarray(faces), solution.face_element, face0, face1,
                    solution.vertices, solution.vertex_radiance, solution.element_normal, solution.element_optics,
                    solution.element_twin, cam_vecs, cam_params, np.int64(width), np.int64(height), np.int64(spp),
-                   np.int64(settings.seed), np.int64(5 if depth is None else depth),
+                   np.int64(settings.seed), np.int64(UNBOUNDED_DEPTH if depth is None else depth),
                    np.asarray(background, np.float64), out, rays)
     if progress is not None:
         progress(1.0)

@@ -1,10 +1,13 @@
 """From patch radiance to what is drawn: radiance averaged to the patches' corners (Gouraud), or kept per
 patch (flat), and the scan-line renderer drawing it.
 
-Each corner of a patch takes the area-weighted mean radiance of the patches that meet at that point, on the
-same surface (object, material, side) and turned less than 35° from it: so a tessellated sphere or a
-subdivided wall shades smoothly, while the edge of a box or the line where two materials meet stays sharp,
-as in the classic radiosity displays (Cohen & Wallace, *Radiosity and Realistic Image Synthesis*, §8.3).
+Each corner of a patch takes the area-weighted mean, over the patches that meet at that point on the same
+surface (object, material, side) and turned less than 35° from it, of their radiance carried to the corner
+along their gradients (`extrapolated`: least squares over the neighbouring patches' centres): so a
+tessellated sphere or a subdivided wall shades smoothly, the edge of a box or the line where two materials
+meet stays sharp, as in the classic radiosity displays (Cohen & Wallace, *Radiosity and Realistic Image
+Synthesis*, §8.3), and a surface's border takes the trend of the light there rather than repeating its edge
+patches' centre values (nodal extrapolation, ibid.).
 """
 
 from __future__ import annotations

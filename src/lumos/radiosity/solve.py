@@ -59,10 +59,14 @@ def patch_bvh(p: Patches):
     return compiled, tri_poly
 
 
-def scene_digest(scene) -> str:
+def scene_digest(scene, sides=None) -> str:
     """A fingerprint of what a solution depends on: the objects, lights and materials (not the camera, the
-    image size or the display settings, so a saved solution renders any view)."""
-    data = scene.model_dump(exclude={"camera", "render"}, warnings=False)
+    image size, the display settings, the background or the ambient term, so a saved solution renders any
+    view), and `sides`: which sides of which objects are patches (the inside of a solid is one only when the
+    camera or a light is in it, so a solution solved from outside a box cannot draw the view from inside)."""
+    data = scene.model_dump(exclude={"camera", "render", "background", "ambient"}, warnings=False)
+    if sides is not None:
+        data["_sides"] = np.asarray(sides)
 
     def encode(value):  # mesh arrays (from files or inline) by their bytes; paths and the rest as text
         if isinstance(value, np.ndarray):
@@ -72,7 +76,7 @@ def scene_digest(scene) -> str:
     return hashlib.sha1(json.dumps(data, sort_keys=True, default=encode).encode()).hexdigest()
 
 
-def solve(scene, settings, progress: Optional[Callable[[float], None]] = None,
+def solve(scene, settings=None, progress: Optional[Callable[[float], None]] = None,
           say: Optional[Callable[[str], None]] = None) -> Solution:
     """The radiosity solution of `scene` (a Scene, a dict or a path) with the `radiosity` block of `settings`
     (a RenderSettings; default: the scene's own `render:` block)."""

@@ -135,7 +135,8 @@ def load_solution(path: str | os.PathLike, scene_digest: Optional[str] = None) -
     stored = meta["scene_digest"]
     if scene_digest and stored and scene_digest != stored:
         raise LumosError(f"radiosity solution '{path}' was solved for a different scene (its geometry or materials "
-                         f"changed); solve the scene again")
+                         f"changed, or its lights, or the camera moved into or out of a solid, whose inside "
+                         f"is meshed only then); solve the scene again")
     return Solution(**arrays, settings=meta["settings"], stats=meta["stats"], scene_digest=stored)
 
 
