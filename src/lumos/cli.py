@@ -229,6 +229,7 @@ def run_radiosity_solve(args: argparse.Namespace, started: float) -> int:
     from . import api
     from .radiosity.export import FORMATS
     from .radiosity.solve import solve
+    from .radiosity.store import check_output_path
     from .scene.loader import load_scene
 
     out = Path(args.output) if args.output else (None if args.export else Path(Path(args.scene).stem + ".npz"))
@@ -237,17 +238,11 @@ def run_radiosity_solve(args: argparse.Namespace, started: float) -> int:
     for path in args.export or []:
         if Path(path).suffix.lower() not in FORMATS:
             raise LumosError(f"cannot export '{path}': the baked mesh is {' or '.join(FORMATS)}")
-    # the folders are checked before the solve, which may take minutes
-    for path, what in [(out, "solution")] + [(Path(p), "export") for p in args.export or []]:
-        if path is None:
-            continue
-        if path.is_dir():
-            raise LumosError(f"cannot write {what} '{path}': it is a directory")
-        folder = path.parent if str(path.parent) else Path(".")
-        if not folder.is_dir():
-            raise LumosError(f"cannot write {what} '{path}': folder '{folder}' does not exist")
-        if not os.access(folder, os.W_OK):
-            raise LumosError(f"cannot write {what} '{path}': folder '{folder}' is not writable")
+    # the outputs' folders are checked before the solve, which may take minutes
+    if out is not None:
+        check_output_path(out, (".npz",), "cannot write solution")
+    for path in args.export or []:
+        check_output_path(path, tuple(FORMATS), "cannot export")
     if args.stats:
         _check_stats_path(Path(args.stats))
     scene = load_scene(args.scene)

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 from pathlib import Path
 from typing import Callable
 
@@ -23,6 +22,7 @@ import numpy as np
 
 from .. import film
 from ..errors import LumosError
+from .atomic import one_line, write_atomically
 
 #: Extensions `write_image` can write (and `read_image` can read).
 SUPPORTED = (".png", ".exr", ".pfm", ".npy")
@@ -30,10 +30,7 @@ SUPPORTED = (".png", ".exr", ".pfm", ".npy")
 READABLE = SUPPORTED + (".jpg", ".jpeg")
 
 
-def _one_line(exc: BaseException) -> str:
-    """An exception's message squeezed onto one short line."""
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) <= 160 else text[:157] + "..."
+_one_line = one_line
 
 
 # ---------------------------------------------------------------------------------------------------- writing
@@ -87,33 +84,7 @@ def write_image(path: str | os.PathLike, array: np.ndarray, exposure: float = 1.
 
 def _atomic_write(out: Path, write: Callable[[str], None]) -> None:
     """Run `write(tmp_name)` on a temporary file beside `out`, then move it over `out`; clean up on failure."""
-    try:
-        with tempfile.NamedTemporaryFile(dir=out.parent, prefix=f".{out.name}.", suffix=out.suffix, delete=False) as f:
-            tmp = f.name
-    except OSError as exc:
-        raise LumosError(f"cannot write image '{out}': {_one_line(exc)}") from None
-    try:
-        write(tmp)
-        os.chmod(tmp, _final_mode(out))  # NamedTemporaryFile is 0600; give the usual permissions
-        os.replace(tmp, out)
-    except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        if isinstance(exc, OSError):
-            raise LumosError(f"cannot write image '{out}': {_one_line(exc)}") from None
-        raise
-
-
-def _final_mode(out: Path) -> int:
-    """The permission bits `out` should get: those of the file it replaces, else 0666 less the umask."""
-    try:
-        return out.stat().st_mode & 0o777
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
+    write_atomically(out, write, f"cannot write image '{out}'")
 
 
 def _write_png(path: str, pixels: np.ndarray) -> None:

@@ -22,7 +22,7 @@ attribute), uint32 indices, and an unlit material (`KHR_materials_unlit`, white 
 show the baked colours without lighting them again; `asset.generator` is "lumos", and `asset.extras` records
 the exposure and what each attribute holds.
 
-Writes are atomic (see `store.write_atomically`); every problem is a `LumosError` with a one-line message.
+Writes are atomic (`io.atomic.write_atomically`); every problem is a `LumosError` with a one-line message.
 """
 
 from __future__ import annotations
@@ -38,7 +38,8 @@ import numpy as np
 from .. import film
 from ..errors import LumosError
 from .solution import Solution
-from .store import DISPLAY_FIELDS, check_arrays, check_output_path, write_atomically
+from ..io.atomic import write_atomically
+from .store import DISPLAY_FIELDS, check_arrays, check_output_path
 
 #: Extensions `export_solution` writes.
 FORMATS = (".ply", ".glb")
@@ -76,7 +77,7 @@ def export_solution(solution: Solution, path: str | os.PathLike, exposure: float
         with open(tmp, "wb") as f:
             f.write(data)
 
-    write_atomically(out, write, fail)
+    write_atomically(out, write, fail, suffix=".tmp")
 
 
 # ---------------------------------------------------------------------------------------------------- PLY

@@ -22,14 +22,14 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import zipfile
 from pathlib import Path
-from typing import Callable, Optional
+from typing import Optional
 
 import numpy as np
 
 from ..errors import LumosError
+from ..io.atomic import one_line, write_atomically
 from .solution import Solution
 
 #: Bumped whenever the arrays or their meaning change; `load_solution` refuses other versions.
@@ -92,7 +92,7 @@ def save_solution(solution: Solution, path: str | os.PathLike) -> None:
         with open(tmp, "wb") as f:
             np.savez(f, **contents)
 
-    write_atomically(out, write, fail)
+    write_atomically(out, write, fail, suffix=".tmp")
 
 
 def _json_scalar(value):
@@ -225,12 +225,6 @@ def _shown(shape: tuple, sizes: Optional[dict] = None) -> str:
 # ---------------------------------------------------------------------------------------------------- files
 
 
-def one_line(exc: BaseException) -> str:
-    """An exception's message squeezed onto one short line."""
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) <= 160 else text[:157] + "..."
-
-
 def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...], action: str) -> Path:
     """Check that a file could be written to `path` without writing anything; return it as a `Path`.
 
@@ -253,35 +247,3 @@ def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...], acti
     if not os.access(folder, os.W_OK | os.X_OK):
         raise LumosError(f"{fail}: permission denied (folder '{folder}' is not writable)")
     return out
-
-
-def write_atomically(out: Path, write: Callable[[str], None], fail: str) -> None:
-    """Run `write(tmp_name)` on a temporary file beside `out`, then move it over `out`; on any failure remove
-    the temporary file and leave `out` as it was. OSErrors become LumosError `'{fail}: <reason>'`."""
-    try:
-        with tempfile.NamedTemporaryFile(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp", delete=False) as f:
-            tmp = f.name
-    except OSError as exc:
-        raise LumosError(f"{fail}: {one_line(exc)}") from None
-    try:
-        write(tmp)
-        os.chmod(tmp, _final_mode(out))  # NamedTemporaryFile is 0600; give the usual permissions
-        os.replace(tmp, out)
-    except BaseException as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        if isinstance(exc, OSError):
-            raise LumosError(f"{fail}: {one_line(exc)}") from None
-        raise
-
-
-def _final_mode(out: Path) -> int:
-    """The permission bits `out` should get: those of the file it replaces, else 0666 less the umask."""
-    try:
-        return out.stat().st_mode & 0o777
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
