@@ -306,3 +306,55 @@ def test_raycast_cell_is_the_single_render_png(capsys, tiny, tmp_path):
         expected = np.asarray(alone.convert("RGB"))
     assert dark_pixels(expected) < expected.shape[0] * expected.shape[1]  # the sphere is lit: not all black
     assert np.array_equal(crop(pixels, cell_box(lay, 0, 32, 24)), expected)
+
+
+# ----------------------------------------------------------------------------- any scene: stand-ins, failures
+
+
+@pytest.fixture
+def broken(monkeypatch, fakes):
+    """Beside the fakes, a method that cannot draw any scene (as raster cannot draw csg)."""
+
+    def render_broken(compiled, camera, settings, progress=None):
+        raise LumosError("objects[0]: csg objects cannot be drawn by broken")
+
+    module = sys.modules["lumos_sheet_fakes"]
+    module.render_broken = render_broken
+    monkeypatch.setitem(api.METHODS, "broken", f"{module.__name__}:render_broken")
+    return fakes
+
+
+def test_a_method_that_cannot_draw_the_scene_gets_a_cell_that_says_why(capsys, broken, tiny, tmp_path):
+    out = tmp_path / "s.png"
+    code, err = run(capsys, "sheet", tiny, "--methods", "ramp,broken", "-o", out)
+    assert code == 0, err
+    assert "1 not rendered" in err
+    img, cells = sheet.make_sheet(tiny, sheet.entries_for(["ramp", "broken"]), warm_up=False)
+    assert cells[0]["image"] is not None and cells[0]["error"] is None
+    assert cells[1]["image"] is None and "csg objects cannot be drawn by broken" in cells[1]["error"]
+    assert not cells[1]["error"].startswith(str(tiny))  # the title names the file
+    # the failed cell is drawn: a light box with dark red text, the size the render would have had
+    pixels = np.asarray(img)
+    x, y, w, h = cells[1]["box"]
+    assert (w, h) == (32, 24)
+    box = pixels[y : y + h, x : x + w].reshape(-1, 3)
+    assert (box == sheet.FAILED).all(axis=1).mean() > 0.5
+    assert (box[:, 0].astype(int) - box[:, 2].astype(int) > 60).any()
+
+
+def test_a_sheet_where_no_method_can_draw_the_scene_is_an_error(capsys, broken, tiny, tmp_path):
+    code, err = run(capsys, "sheet", tiny, "--methods", "broken", "-q", "-o", tmp_path / "s.png")
+    assert code == 2
+    assert "no method could render the scene" in one_error_line(err)
+    assert not (tmp_path / "s.png").exists()
+
+
+def test_adaptive_anti_aliasing_becomes_supersampling_for_the_other_methods(fakes, tmp_path, monkeypatch):
+    path = tmp_path / "adaptive.yaml"
+    path.write_text(TINY.replace("width: 32, height: 24", "width: 32, height: 24, antialias: adaptive"))
+    img, cells = sheet.make_sheet(path, sheet.entries_for(["ramp"]), warm_up=False)
+    assert fakes[-1].antialias == "supersample" and fakes[-1].spp == sheet.ADAPTIVE_STAND_IN_SPP
+    assert "supersampled" in cells[0]["label"]
+    monkeypatch.setitem(api.METHODS, "whitted", api.METHODS["ramp"])
+    jobs = sheet._jobs(lumos.scene.loader.load_scene(path), [("whitted", {"method": "whitted"})], {}, None)
+    assert "antialias" not in jobs[0][1] and jobs[0][0] == "whitted"  # whitted keeps its own

@@ -371,8 +371,10 @@ def run_sheet(args: argparse.Namespace, started: float) -> int:
                                     title=Path(args.scene).name, **overrides)
     sheet.save_sheet(image, out)
     if not args.quiet:
-        first, count = cells[0]["image"], f"{len(cells)} render{'s' if len(cells) > 1 else ''}"
-        print(f"lumos: sheet of {count} ({first.width}x{first.height}), {time.perf_counter() - started:.2f} s "
+        first, count = cells[0], f"{len(cells)} render{'s' if len(cells) > 1 else ''}"
+        failed = sum(cell["image"] is None for cell in cells)
+        count += f", {failed} not rendered (the cells say why)" if failed else ""
+        print(f"lumos: sheet of {count} ({first['width']}x{first['height']}), {time.perf_counter() - started:.2f} s "
               f"(compile {image.info['compile_s']:.2f} s) -> {out}", file=sys.stderr)
     return 0
 

@@ -32,6 +32,7 @@ from typing import Iterable, Optional
 
 from . import api, film
 from .errors import LumosError
+from .io.atomic import one_line
 
 #: Columns of the grid unless asked otherwise.
 MAX_COLUMNS = 4
@@ -52,6 +53,12 @@ WARMUP_SIZE = 8
 RASTER_SHADINGS = (("flat", "flat"), ("Gouraud", "gouraud"), ("Phong", "phong"))
 #: Samples per pixel of the path tracer's cell at least, unless the sheet is given an spp.
 PATH_MIN_SPP = 64
+#: Samples per pixel of the supersampling that stands in for whitted's adaptive anti-aliasing in the other
+#: methods' cells (adaptive_depth 3 spends 1 ray per pixel on flat areas and up to 64 on edges; 4 jittered
+#: samples per pixel is about its cost on the Whitted examples), unless the sheet is given an spp.
+ADAPTIVE_STAND_IN_SPP = 4
+#: Colour of a cell a method could not render, and of its text.
+FAILED, FAILED_INK = (242, 242, 242), (150, 40, 40)
 #: Output formats of a sheet, by extension.
 SHEET_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG"}
 
@@ -121,12 +128,23 @@ def make_sheet(scene, entries: Optional[list[tuple[str, dict]]] = None, columns:
 
     compile_s = _warm_up(scene, [job for _, job in jobs], progress, say) if warm_up else None
     cells = []
-    for i, (label, job) in enumerate(jobs, 1):
-        img = api.render(scene, progress=progress, **job)
-        cells.append({"label": label, "method": job["method"], "shading": job.get("shading"),
-                      "render_s": float(img.stats["render_s"]), "image": img})
+    for i, ((label, job), cfg) in enumerate(zip(jobs, configs), 1):
+        cell = {"label": label, "method": job["method"], "shading": job.get("shading"),
+                "width": cfg.width, "height": cfg.height}
+        try:
+            img = api.render(scene, progress=progress, **job)
+        except LumosError as exc:  # this method cannot draw this scene: a cell that says why, not a failed sheet
+            why = one_line(exc)
+            if scene.source is not None and why.startswith(f"{scene.source}: "):
+                why = why[len(f"{scene.source}: "):]  # the sheet's title names the file
+            cells.append({**cell, "render_s": None, "image": None, "error": why})
+            say(f"[{i}/{len(jobs)}] {label}: not rendered: {why}")
+            continue
+        cells.append({**cell, "render_s": float(img.stats["render_s"]), "image": img, "error": None})
         say(f"[{i}/{len(jobs)}] {label}: {img.width}x{img.height}, {format_seconds(img.stats['render_s'])}")
 
+    if all(cell["image"] is None for cell in cells):
+        raise LumosError(f"sheet: no method could render the scene ({cells[0]['label']}: {cells[0]['error']})")
     cfg = configs[0]
     same_size = all((c.width, c.height) == (cfg.width, cfg.height) for c in configs)
     info = [f"{cfg.width}x{cfg.height}" if same_size else "", f"{cfg.spp} spp" if same_size else "",
@@ -150,6 +168,12 @@ def _jobs(scene, entries, settings: dict, max_cell_width: Optional[int]) -> list
             raise LumosError(f"sheet: entry {label!r} names no method")
         if entry["method"] in api.METHODS:
             job = {**size, **settings, **entry}
+            if job["method"] != "whitted" and settings.get("antialias", scene.render.antialias) == "adaptive":
+                # adaptive anti-aliasing is whitted's: the others supersample at about its cost
+                job["antialias"] = "supersample"
+                if settings.get("spp") is None:
+                    job["spp"] = max(scene.render.spp, ADAPTIVE_STAND_IN_SPP)
+                label = f"{label} · supersampled"
             if job["method"] == "path" and settings.get("spp") is None and scene.render.spp < PATH_MIN_SPP:
                 # a scene's spp is meant for anti-aliasing; a path tracer needs samples to show its light
                 job["spp"] = PATH_MIN_SPP
@@ -172,7 +196,10 @@ def _warm_up(scene, jobs: list[dict], progress: bool, say) -> float:
         if key not in seen:
             seen.add(key)
             say(f"compiling {job['method']}" + (f" ({job['shading']})" if job.get("shading") else ""))
-            api.render(scene, progress, **{**job, "width": WARMUP_SIZE, "height": WARMUP_SIZE, "spp": 1})
+            try:
+                api.render(scene, progress, **{**job, "width": WARMUP_SIZE, "height": WARMUP_SIZE, "spp": 1})
+            except LumosError:
+                pass  # the method cannot draw this scene: its cell will say why
     return time.perf_counter() - started
 
 
@@ -242,7 +269,9 @@ def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str =
 
     if not cells:
         raise LumosError("sheet: no cells to draw")
-    lay = layout(len(cells), columns, max(c["image"].width for c in cells), max(c["image"].height for c in cells))
+    sizes = [(c["image"].width, c["image"].height) if c.get("image") is not None else (c["width"], c["height"])
+             for c in cells]
+    lay = layout(len(cells), columns, max(w for w, _ in sizes), max(h for _, h in sizes))
     sheet = PILImage.new("RGB", (lay.width, lay.height), BACKGROUND)
     draw = ImageDraw.Draw(sheet)
     fonts = _fonts()
@@ -250,19 +279,40 @@ def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str =
     draw.text((MARGIN, MARGIN), _fit(draw, title, fonts["title"], inner), fill=INK, font=fonts["title"])
     draw.text((MARGIN, MARGIN + _line_height(fonts["title"])), _fit(draw, info, fonts["info"], inner),
               fill=MUTED, font=fonts["info"])
-    for i, cell in enumerate(cells):
-        img = cell["image"]
+    for i, (cell, (w, h)) in enumerate(zip(cells, sizes)):
+        img = cell.get("image")
         slot_x, slot_y = lay.slot(i)
-        x = slot_x + (lay.slot_w - img.width) // 2
-        cell["box"] = (x, slot_y, img.width, img.height)
-        sheet.paste(PILImage.fromarray(film.to_png8(img.array, img.exposure), mode="RGB"), (x, slot_y))
-        draw.rectangle((x - 1, slot_y - 1, x + img.width, slot_y + img.height), outline=FRAME)
+        x = slot_x + (lay.slot_w - w) // 2
+        cell["box"] = (x, slot_y, w, h)
+        if img is not None:
+            sheet.paste(PILImage.fromarray(film.to_png8(img.array, img.exposure), mode="RGB"), (x, slot_y))
+        else:
+            draw.rectangle((x, slot_y, x + w - 1, slot_y + h - 1), fill=FAILED)
+            _wrapped(draw, "not rendered: " + cell.get("error", ""), fonts["time"], FAILED_INK, x, slot_y, w, h)
+        draw.rectangle((x - 1, slot_y - 1, x + w, slot_y + h), outline=FRAME)
         y = slot_y + lay.cell_h + CAPTION_PAD
-        for text, font, colour in ((cell["label"], fonts["label"], INK),
-                                   (format_seconds(cell["render_s"]), fonts["time"], MUTED)):
+        when = format_seconds(cell["render_s"]) if cell.get("render_s") is not None else "not rendered"
+        for text, font, colour in ((cell["label"], fonts["label"], INK), (when, fonts["time"], MUTED)):
             _centred(draw, text, font, colour, slot_x, lay.slot_w, y)
             y += _line_height(font)
     return sheet
+
+
+def _wrapped(draw, text: str, font, colour, x: int, y: int, width: int, height: int) -> None:
+    """`text` word-wrapped into the box (x, y, width, height), from its top, lines that do not fit dropped."""
+    pad = CAPTION_PAD
+    line_h = _line_height(font)
+    lines, line = [], ""
+    for word in _printable(text, font).split():
+        trial = f"{line} {word}".strip()
+        if line and draw.textlength(trial, font=font) > width - 2 * pad:
+            lines.append(line)
+            line = word
+        else:
+            line = trial
+    lines.append(line)
+    for k, text_line in enumerate(lines[: max(1, (height - 2 * pad) // line_h)]):
+        draw.text((x + pad, y + pad + k * line_h), _fit(draw, text_line, font, width - 2 * pad), fill=colour, font=font)
 
 
 def _centred(draw, text: str, font, colour, x: int, width: int, y: int) -> None:
