@@ -266,6 +266,9 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
         patch_size = default_patch_size(lo, hi)
     grow = PLANE_MARGIN * np.maximum(hi - lo, 1e-6)
     plane_lo, plane_hi = lo - grow, hi + grow
+    # and far enough to reach under the camera, so the floor in front of it is not cut off in view
+    eye = np.asarray(scene.camera.position, np.float64)
+    plane_lo, plane_hi = np.minimum(plane_lo, eye), np.maximum(plane_hi, eye)
     b = _Builder()
     mat_index: dict[int, int] = {}
     textured = set()
