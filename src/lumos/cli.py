@@ -229,7 +229,7 @@ def run_radiosity_solve(args: argparse.Namespace, started: float) -> int:
     from . import api
     from .radiosity.export import FORMATS
     from .radiosity.solve import solve
-    from .radiosity.store import check_output_path
+    from .io.atomic import check_output_path
     from .scene.loader import load_scene
 
     out = Path(args.output) if args.output else (None if args.export else Path(Path(args.scene).stem + ".npz"))

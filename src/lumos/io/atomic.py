@@ -1,4 +1,4 @@
-"""Whole-or-nothing file writes: every file lumos writes (images, sheets, radiosity solutions, baked meshes) is
+"""Output paths checked before any work, and whole-or-nothing file writes: every file lumos writes (images, sheets, radiosity solutions, baked meshes) is
 written to a temporary file beside its destination and moved over it only once complete, so an interrupted or
 failed write leaves the old file (or none), never half a file."""
 
@@ -51,3 +51,27 @@ def final_mode(out: Path) -> int:
         umask = os.umask(0)
         os.umask(umask)
         return 0o666 & ~umask
+
+
+def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...], action: str) -> Path:
+    """Check that a file could be written to `path` without writing anything; return it as a `Path`.
+
+    extensions: the allowed suffixes, lower-case (matched case-insensitively).
+    action: the start of the error message, e.g. 'cannot save radiosity solution'.
+    Raises LumosError for a wrong extension, a directory, a folder that does not exist or is not writable.
+    """
+    out = Path(path)
+    fail = f"{action} '{path}'"
+    if out.is_dir():
+        raise LumosError(f"{fail}: it is a directory")
+    if out.suffix.lower() not in extensions:
+        shown = f"extension '{out.suffix}'" if out.suffix else "no extension"
+        raise LumosError(f"{fail}: unsupported {shown} (supported: {', '.join(extensions)})")
+    folder = out.parent
+    if not folder.exists():
+        raise LumosError(f"{fail}: folder '{folder}' does not exist")
+    if not folder.is_dir():
+        raise LumosError(f"{fail}: '{folder}' is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise LumosError(f"{fail}: permission denied (folder '{folder}' is not writable)")
+    return out

@@ -22,6 +22,7 @@ import numpy as np
 
 from .. import film
 from ..errors import LumosError
+from .atomic import check_output_path as _check_path
 from .atomic import one_line, write_atomically
 
 #: Extensions `write_image` can write (and `read_image` can read).
@@ -42,22 +43,7 @@ def check_output_path(path: str | os.PathLike) -> Path:
     Raises LumosError for an unsupported extension, a path that is a directory, a folder that does not
     exist (or is not a folder) and a folder that is not writable.
     """
-    out = Path(path)
-    fail = f"cannot write image '{path}'"
-    if out.is_dir():
-        raise LumosError(f"{fail}: it is a directory")
-    ext = out.suffix.lower()
-    if ext not in SUPPORTED:
-        shown = f"extension '{out.suffix}'" if out.suffix else "no extension"
-        raise LumosError(f"{fail}: unsupported {shown} (supported: {', '.join(SUPPORTED)})")
-    folder = out.parent
-    if not folder.exists():
-        raise LumosError(f"{fail}: folder '{folder}' does not exist")
-    if not folder.is_dir():
-        raise LumosError(f"{fail}: '{folder}' is not a folder")
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise LumosError(f"{fail}: permission denied (folder '{folder}' is not writable)")
-    return out
+    return _check_path(path, tuple(SUPPORTED), "cannot write image")
 
 
 def write_image(path: str | os.PathLike, array: np.ndarray, exposure: float = 1.0, *, srgb: bool = True) -> None:

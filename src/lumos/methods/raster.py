@@ -26,7 +26,7 @@ from ..errors import LumosError
 from ..compile.camera import camera_arrays
 from ..kernels import raster as R
 from ..kernels.illumination import illuminate
-from ..kernels.jit import njit, njit_parallel, prange
+from ..kernels.jit import njit, njit_inline, njit_parallel, prange
 from ..kernels.layout import LIGHT_SPHERE, MAT_EMISSION, MAT_KD
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
@@ -40,6 +40,17 @@ _SHADING = {"flat": FLAT, "gouraud": GOURAUD, "phong": PHONG}
 #: side the vertex normals point to and of the other side.
 G_POS, G_NORMAL, G_COLOUR = 0, 3, 6
 _CHUNK = 2048
+
+
+@njit_inline
+def _view_depth(cam_vecs, ortho, p):
+    """The depth AOV of point p: its distance from the eye, or along the view direction for an orthographic
+    camera (DESIGN.md's AOV convention, as the ray methods write it)."""
+    if ortho:
+        return ((cam_vecs[0, 0] - p[0]) * cam_vecs[3, 0] + (cam_vecs[0, 1] - p[1]) * cam_vecs[3, 1]
+                + (cam_vecs[0, 2] - p[2]) * cam_vecs[3, 2])
+    dx, dy, dz = cam_vecs[0, 0] - p[0], cam_vecs[0, 1] - p[1], cam_vecs[0, 2] - p[2]
+    return np.sqrt(dx * dx + dy * dy + dz * dz)
 
 
 @njit
@@ -154,12 +165,7 @@ def _shade(sa, ids, gbuf, prim_info, prim_normal, prim_colour, cam_vecs, ortho, 
             accum[y, x, 1] += weight * g
             accum[y, x, 2] += weight * b
             if aovs:
-                if ortho:
-                    depth[y, x] = ((cam_vecs[0, 0] - p[0]) * cam_vecs[3, 0] + (cam_vecs[0, 1] - p[1]) * cam_vecs[3, 1]
-                                   + (cam_vecs[0, 2] - p[2]) * cam_vecs[3, 2])
-                else:
-                    dx, dy, dz = cam_vecs[0, 0] - p[0], cam_vecs[0, 1] - p[1], cam_vecs[0, 2] - p[2]
-                    depth[y, x] = np.sqrt(dx * dx + dy * dy + dz * dz)
+                depth[y, x] = _view_depth(cam_vecs, ortho, p)
                 normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_sh
                 albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2]
                 object_id[y, x] = prim_info[prim, 1]
@@ -306,12 +312,7 @@ def _shade_colours(ids, gbuf, prim_colour, shading, background, weight, accum, a
                 accum[y, x, c] += weight * v
             if aovs:
                 p = (np.float64(gbuf[y, x, 0]), np.float64(gbuf[y, x, 1]), np.float64(gbuf[y, x, 2]))
-                if ortho:
-                    depth[y, x] = ((cam_vecs[0, 0] - p[0]) * cam_vecs[3, 0] + (cam_vecs[0, 1] - p[1]) * cam_vecs[3, 1]
-                                   + (cam_vecs[0, 2] - p[2]) * cam_vecs[3, 2])
-                else:
-                    dx, dy, dz = cam_vecs[0, 0] - p[0], cam_vecs[0, 1] - p[1], cam_vecs[0, 2] - p[2]
-                    depth[y, x] = np.sqrt(dx * dx + dy * dy + dz * dz)
+                depth[y, x] = _view_depth(cam_vecs, ortho, p)
                 for c in range(3):
                     normal[y, x, c] = gbuf[y, x, G_NORMAL + c]
                     albedo[y, x, c] = prim_albedo[prim, c]

@@ -38,8 +38,8 @@ import numpy as np
 from .. import film
 from ..errors import LumosError
 from .solution import Solution
-from ..io.atomic import write_atomically
-from .store import DISPLAY_FIELDS, check_arrays, check_output_path
+from ..io.atomic import check_output_path, write_atomically
+from .store import DISPLAY_FIELDS, check_arrays
 
 #: Extensions `export_solution` writes.
 FORMATS = (".ply", ".glb")

@@ -29,7 +29,7 @@ from typing import Optional
 import numpy as np
 
 from ..errors import LumosError
-from ..io.atomic import one_line, write_atomically
+from ..io.atomic import check_output_path, one_line, write_atomically
 from .solution import Solution
 
 #: Bumped whenever the arrays or their meaning change; `load_solution` refuses other versions.
@@ -223,27 +223,3 @@ def _shown(shape: tuple, sizes: Optional[dict] = None) -> str:
 
 
 # ---------------------------------------------------------------------------------------------------- files
-
-
-def check_output_path(path: str | os.PathLike, extensions: tuple[str, ...], action: str) -> Path:
-    """Check that a file could be written to `path` without writing anything; return it as a `Path`.
-
-    extensions: the allowed suffixes, lower-case (matched case-insensitively).
-    action: the start of the error message, e.g. 'cannot save radiosity solution'.
-    Raises LumosError for a wrong extension, a directory, a folder that does not exist or is not writable.
-    """
-    out = Path(path)
-    fail = f"{action} '{path}'"
-    if out.is_dir():
-        raise LumosError(f"{fail}: it is a directory")
-    if out.suffix.lower() not in extensions:
-        shown = f"extension '{out.suffix}'" if out.suffix else "no extension"
-        raise LumosError(f"{fail}: unsupported {shown} (supported: {', '.join(extensions)})")
-    folder = out.parent
-    if not folder.exists():
-        raise LumosError(f"{fail}: folder '{folder}' does not exist")
-    if not folder.is_dir():
-        raise LumosError(f"{fail}: '{folder}' is not a folder")
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise LumosError(f"{fail}: permission denied (folder '{folder}' is not writable)")
-    return out
