@@ -15,7 +15,7 @@ import time
 from typing import TYPE_CHECKING, Any, Callable, Optional
 
 from .errors import LumosError
-from .scene.model import PATH_AOVS, RenderSettings, Scene
+from .scene.model import PATH_AOVS, TERM_AOVS, RenderSettings, Scene
 
 if TYPE_CHECKING:
     from .image import Image
@@ -78,7 +78,12 @@ def check_method_settings(settings: RenderSettings) -> None:
         for name in PATH_AOVS:
             if name in settings.aov:
                 raise LumosError(f"render.aov: the {name!r} AOV is made by method path only")
-    elif settings.antialias == "adaptive":
+    if method in ("path", "radiosity"):
+        for name in TERM_AOVS:
+            if name in settings.aov:
+                raise LumosError(f"render.aov: the {name!r} AOV is a term of the classic model, made by raycast, "
+                                 f"raster and whitted; method {method} computes global illumination")
+    if method == "path" and settings.antialias == "adaptive":
         raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; path takes none (pixel "
                          "centres) or supersample (spp samples spread over each pixel by the filter)")
     if "noisy" in settings.aov and not settings.denoise:

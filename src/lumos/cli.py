@@ -28,7 +28,7 @@ from .errors import LumosError, LumosWarning
 
 #: render flags that override the scene's `render:` block (argparse dest == setting name).
 SETTING_FLAGS = ("method", "shading", "width", "height", "spp", "max_depth", "seed", "threads", "exposure", "aov",
-                 "antialias", "time_limit", "denoise", "filter", "sampling", "sampler")
+                 "antialias", "time_limit", "denoise", "filter", "sampling", "sampler", "mipmap")
 #: The methods, for the help text (kept in step with `api.METHODS` by a test).
 METHOD_HELP = ("raycast (ray casting), raster (scan-line, z-buffer), whitted (recursive ray tracing), path "
                "(path tracing, global illumination) or radiosity (diffuse global illumination over patches)")
@@ -134,7 +134,13 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--exposure", type=float, metavar="E", help="exposure multiplier for PNG output")
     render.add_argument("--aov", action="extend", nargs="+", metavar="NAME",
                         help="also write these buffers beside OUT: depth, normal, albedo, object_id, samples; "
-                        "path also variance (of each pixel's mean) and noisy (the image before --denoise)")
+                        "raycast, raster and whitted also the terms of the model, which add up to the image: "
+                        "ambient, diffuse, specular, emitted, reflected, transmitted; path also variance (of each "
+                        "pixel's mean) and noisy (the image before --denoise)")
+    ras = render.add_argument_group("scan-line rendering (--method raster)")
+    ras.add_argument("--no-mipmap", dest="mipmap", action="store_const", const=False, help="look textures up at "
+                     "each pixel's centre instead of filtering them over its footprint (mip-mapping): shows the "
+                     "aliasing that filtering removes")
     path = render.add_argument_group("path tracing (--method path)")
     path.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass of samples that "
                       "crosses this time; the image holds the samples taken so far (Ctrl-C also stops after the "
@@ -292,6 +298,8 @@ def run_render(args: argparse.Namespace, started: float) -> int:
     cfg = api.resolve_settings(scene, overrides)  # bad flags fail here, before anything is compiled
     if args.solution is not None and cfg.method != "radiosity":
         raise LumosError(f"--solution is a radiosity solution; method {cfg.method} does not draw one")
+    if args.mipmap is not None and cfg.method != "raster":
+        raise LumosError(f"--no-mipmap is a raster setting; method {cfg.method} does not filter textures")
     radiosity_given = _radiosity_overrides(args)
     if radiosity_given and cfg.method != "radiosity":
         flag = "--" + next(iter(radiosity_given["radiosity"])).replace("_", "-")

@@ -6,6 +6,8 @@ planet.png    256×128 sRGB colour map in latitude–longitude layout (u = longi
               oceans, continents from fractal noise, deserts, forests, polar ice. Seamless across u = 0 / 1.
 bumps.png     128×128 8-bit greyscale height map (raw values, not colour): round craters on a rolling ground,
               seamless in both directions.
+checker.png   256×256 sRGB checkerboard of 4×4 tiles, cream and slate, with a thin dark grout line: a floor whose
+              fine detail aliases into moiré towards the horizon unless the renderer filters it (mip-mapping).
 """
 
 from pathlib import Path
@@ -69,6 +71,18 @@ def bumps(size=128):
     return Image.fromarray(np.rint(255 * np.clip(h, 0, 1)).astype(np.uint8), mode="L")
 
 
+def checker(size=256, tiles=4):
+    c = np.arange(size)
+    X, Y = np.meshgrid(c, c)
+    cell = size // tiles
+    odd = ((X // cell) + (Y // cell)) % 2 == 1
+    rgb = np.where(odd[..., None], np.array([0.23, 0.27, 0.33]), np.array([0.86, 0.82, 0.72]))
+    grout = (X % cell < 3) | (Y % cell < 3)
+    rgb[grout] = (0.08, 0.08, 0.09)
+    return Image.fromarray(np.rint(255 * rgb).astype(np.uint8), mode="RGB")
+
+
 if __name__ == "__main__":
     planet().save(HERE / "planet.png", optimize=True)
     bumps().save(HERE / "bumps.png", optimize=True)
+    checker().save(HERE / "checker.png", optimize=True)

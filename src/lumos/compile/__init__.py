@@ -260,12 +260,12 @@ def _compile_raster(scene, settings) -> CompiledScene:
         for mat, obj in {(int(a), int(b)) for a, b in info[:, :2]}:
             sel = (info[:, 0] == mat) & (info[:, 1] == obj)
             tri_parts.append((verts[sel], None, None, mat, obj))
-    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names)
+    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names, mipmaps=settings.mipmap)
     compiled.raster = mesh
     return compiled
 
 
-def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledScene:
+def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False) -> CompiledScene:
     light_kind, light_samples, light_vecs, light_scalars = lights
     tri_verts, tri_normals, tri_uvs, tri_info = _concat_triangles(tri_parts)
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
@@ -298,7 +298,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
     shape_ids = np.array(bounded, dtype=np.int64)[order[~is_tri] - n_tri] if len(bounded) else np.zeros(0, np.int64)
     prim_ref[~is_tri] = ~shape_ids.astype(np.int32)
 
-    tex_info, tex_pixels = build_textures(materials)  # also fills the rows' MAT_TEXTURE / MAT_BUMP
+    tex_info, tex_pixels = build_textures(materials, mipmaps)  # also fills the rows' MAT_TEXTURE / MAT_BUMP
     material_rows = materials.array()
     if n_shape:
         shape_mats = material_rows[shape_info[:, L.INFO_MATERIAL]]

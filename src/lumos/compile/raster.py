@@ -30,6 +30,7 @@ class RasterMesh:
     prim_info: np.ndarray  # int32 (np, 3): material, object, area light (or -1)
     prim_point: np.ndarray  # float64 (np, 3): where flat shading evaluates the model (the polygon's centroid)
     prim_normal: np.ndarray  # float64 (np, 3): the polygon's unit face normal (its winding's side)
+    prim_uv: np.ndarray = None  # float64 (np, 2): the surface coordinates at prim_point (flat shading's texture)
 
     @property
     def n_prims(self) -> int:
@@ -42,6 +43,41 @@ class RasterMesh:
             return self.prim_index.reshape(-1, 3).astype(np.int64), np.arange(self.n_prims)
         polys = [self.prim_index[a:b] for a, b in zip(self.prim_start[:-1], self.prim_start[1:])]
         return meshops.triangulate(self.positions, polys)
+
+    def uv_frames(self) -> np.ndarray:
+        """float64 (np, 12) per polygon: ∂p/∂u, ∂p/∂v (world space, for bump maps) and the gradients of u and of
+        v with respect to the world position within the polygon's plane (∇u·∂p/∂u = 1, ∇u·∂p/∂v = 0, and so on:
+        a pixel's texture footprint is ∇u·dp/dx, ...), from its largest triangle's uvs. A polygon whose uvs are
+        degenerate gets zero rows: no bump, and its textures are looked up unfiltered."""
+        faces, prim = self.triangles()
+        out = np.zeros((self.n_prims, 12))
+        if not len(faces):
+            return out
+        p0, p1, p2 = (self.positions[faces[:, k]] for k in range(3))
+        t0, t1, t2 = (self.uvs[faces[:, k]] for k in range(3))
+        e1, e2 = p1 - p0, p2 - p0
+        du1, dv1 = t1[:, 0] - t0[:, 0], t1[:, 1] - t0[:, 1]
+        du2, dv2 = t2[:, 0] - t0[:, 0], t2[:, 1] - t0[:, 1]
+        det = du1 * dv2 - dv1 * du2
+        area = np.linalg.norm(np.cross(e1, e2), axis=1)
+        ok = (det != 0.0) & (area > 0.0)
+        inv = np.divide(1.0, det, out=np.zeros_like(det), where=ok)[:, None]
+        dpdu = (dv2[:, None] * e1 - dv1[:, None] * e2) * inv
+        dpdv = (du1[:, None] * e2 - du2[:, None] * e1) * inv
+        n = np.cross(dpdu, dpdv)
+        a = np.cross(dpdv, n)  # ⊥ ∂p/∂v, in the plane
+        b = np.cross(n, dpdu)  # ⊥ ∂p/∂u, in the plane
+        ga = np.einsum("ij,ij->i", a, dpdu)
+        gb = np.einsum("ij,ij->i", b, dpdv)
+        ok &= (ga != 0.0) & (gb != 0.0) & np.isfinite(ga) & np.isfinite(gb)
+        grad_u = np.divide(a, ga[:, None], out=np.zeros_like(a), where=ok[:, None])
+        grad_v = np.divide(b, gb[:, None], out=np.zeros_like(b), where=ok[:, None])
+        frames = np.where(ok[:, None], np.concatenate([dpdu, dpdv, grad_u, grad_v], axis=1), 0.0)
+        # each polygon takes its largest triangle's frame
+        best = np.lexsort((np.where(ok, area, -1.0), prim))
+        last = np.r_[prim[best][1:] != prim[best][:-1], True]
+        out[prim[best][last]] = frames[best][last]
+        return out
 
 
 class _Part:
@@ -134,7 +170,7 @@ def build_raster_mesh(scene, segments: int, object_materials: list, emitters: li
 
 
 def _assemble(parts) -> RasterMesh:
-    positions, normals, uvs, starts, indices, infos, points, fnormals = [], [], [], [], [], [], [], []
+    positions, normals, uvs, starts, indices, infos, points, fnormals, cuvs = [], [], [], [], [], [], [], [], []
     v_off = 0
     i_off = 0
     for p in parts:
@@ -145,11 +181,12 @@ def _assemble(parts) -> RasterMesh:
             # flat shading per polygon: the centroid and the Newell normal
             pt = np.array([verts[q].mean(axis=0) for q in p.polys]).reshape(-1, 3)
             nn = np.array([_newell(verts[q]) for q in p.polys]).reshape(-1, 3)
+            cuv = np.array([np.asarray(p.uvs, np.float64)[q].mean(axis=0) for q in p.polys]).reshape(-1, 2)
         else:
             faces = np.asarray(p.polys, np.int64).reshape(-1, 3)
             counts = np.full(len(faces), 3, np.int64)
             idx = faces.ravel()
-            pt, nn = _group_flat(verts, faces, np.asarray(p.groups, np.int64))
+            pt, nn, cuv = _group_flat(verts, np.asarray(p.uvs, np.float64), faces, np.asarray(p.groups, np.int64))
         positions.append(verts)
         normals.append(np.asarray(p.normals, np.float64))
         uvs.append(np.asarray(p.uvs, np.float64))
@@ -159,12 +196,14 @@ def _assemble(parts) -> RasterMesh:
         info[:] = (p.material, p.object, p.light)
         infos.append(info)
         points.append(pt)
+        cuvs.append(cuv)
         fnormals.append(_unit(nn))
         v_off += len(verts)
         i_off += len(idx)
     if not parts:
         return RasterMesh(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(1, np.int64),
-                          np.zeros(0, np.int32), np.zeros((0, 3), np.int32), np.zeros((0, 3)), np.zeros((0, 3)))
+                          np.zeros(0, np.int32), np.zeros((0, 3), np.int32), np.zeros((0, 3)), np.zeros((0, 3)),
+                          np.zeros((0, 2)))
     prim_start = np.concatenate(starts + [np.array([i_off], np.int64)]).astype(np.int64)
     return RasterMesh(
         np.ascontiguousarray(np.concatenate(positions)),
@@ -175,6 +214,7 @@ def _assemble(parts) -> RasterMesh:
         np.ascontiguousarray(np.concatenate(infos)),
         np.ascontiguousarray(np.concatenate(points)),
         np.ascontiguousarray(np.concatenate(fnormals)),
+        np.ascontiguousarray(np.concatenate(cuvs)),
     )
 
 
@@ -187,19 +227,23 @@ def _newell(p: np.ndarray) -> np.ndarray:
     ])
 
 
-def _group_flat(verts, faces, groups):
-    """Per triangle: its group's area-weighted centroid and its group's normal (sum of the cross products)."""
+def _group_flat(verts, uvs, faces, groups):
+    """Per triangle: its group's area-weighted centroid, its group's normal (sum of the cross products) and the
+    surface coordinates at that centroid (the area-weighted mean of the triangles' centroid uvs)."""
     v0, v1, v2 = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
     cr = np.cross(v1 - v0, v2 - v0)
     area = np.linalg.norm(cr, axis=1)
     cen = (v0 + v1 + v2) / 3.0
+    cuv = (uvs[faces[:, 0]] + uvs[faces[:, 1]] + uvs[faces[:, 2]]) / 3.0
     if len(groups) and np.array_equal(groups, np.arange(len(faces))):
-        return cen, cr
+        return cen, cr, cuv
     ng = int(groups.max()) + 1 if len(groups) else 0
     gn = np.stack([np.bincount(groups, cr[:, k], ng) for k in range(3)], axis=1)
     ga = np.bincount(groups, area, ng)
     gc = np.stack([np.bincount(groups, cen[:, k] * area, ng) for k in range(3)], axis=1)
     gc = np.divide(gc, ga[:, None], out=np.zeros_like(gc), where=ga[:, None] > 0)
+    gu = np.stack([np.bincount(groups, cuv[:, k] * area, ng) for k in range(2)], axis=1)
+    gu = np.divide(gu, ga[:, None], out=np.zeros_like(gu), where=ga[:, None] > 0)
     # a group of zero area keeps its own triangle's centroid
-    point = np.where(ga[groups][:, None] > 0, gc[groups], cen)
-    return point, gn[groups]
+    has_area = ga[groups][:, None] > 0
+    return np.where(has_area, gc[groups], cen), gn[groups], np.where(has_area, gu[groups], cuv)

@@ -4,7 +4,8 @@
 
 Images are read once each with Pillow (two materials naming the same file share its texels). A colour texture
 is decoded from sRGB to linear RGB (`film.srgb_decode`); a bump map is data, not colour: its height is the
-Rec. 709 luminance of the file's raw values scaled to [0, 1], not decoded. Rows are stored bottom row first.
+Rec. 709 luminance of the file's raw values scaled to [0, 1], not decoded. Rows are stored bottom row first;
+for the scan-line renderer a colour image is followed by its mip-map levels (`mip_levels`).
 """
 
 from __future__ import annotations
@@ -25,13 +26,15 @@ _APPLY = {"ka": T.APPLY_KA, "kd": T.APPLY_KD, "ks": T.APPLY_KS, "kr": T.APPLY_KR
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
-def build_textures(materials) -> tuple[np.ndarray, np.ndarray]:
+def build_textures(materials, mipmaps: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Texture table of a `compile._Materials`: (tex_info float64 (n, TEX_SIZE), tex_pixels float32 (m, 3)).
+    With `mipmaps`, each colour image is followed by its mip-map levels (the scan-line renderer filters with
+    them; the ray methods look up level 0 only and skip building them).
 
     Writes the tex_info row of each material's texture and bump map (or -1) into its MAT_TEXTURE and MAT_BUMP
     columns, in place in `materials.rows`, so call it before `materials.array()`.
     """
-    table = _Table()
+    table = _Table(mipmaps)
     for row, material in zip(materials.rows, materials.materials):
         if material is None:  # an area light's emitter
             continue
@@ -41,10 +44,11 @@ def build_textures(materials) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _Table:
-    def __init__(self):
+    def __init__(self, mipmaps: bool):
+        self.mipmaps = mipmaps
         self.infos: list[np.ndarray] = []
         self.rows: dict[int, int] = {}  # id(texture model) -> tex_info row
-        self.images: dict[tuple[Path, bool], tuple[int, int, int]] = {}  # (path, bump) -> offset, width, height
+        self.images: dict[tuple[Path, bool], tuple[int, int, int, int]] = {}  # (path, bump) -> offset, w, h, levels
         self.pixels: list[np.ndarray] = []
         self.n_pixels = 0
 
@@ -64,26 +68,59 @@ class _Table:
             info[T.TEX_COLOR1 : T.TEX_COLOR1 + 3] = tex.colors[1]
             info[T.TEX_APPLY] = sum(_APPLY[name] for name in set(tex.apply_to))
         if tex.type == "image":
-            info[T.TEX_OFFSET], info[T.TEX_WIDTH], info[T.TEX_HEIGHT] = self._image(tex, bump)
+            info[T.TEX_OFFSET], info[T.TEX_WIDTH], info[T.TEX_HEIGHT], info[T.TEX_LEVELS] = self._image(tex, bump)
         self.rows[key] = len(self.infos)
         self.infos.append(info)
         return self.rows[key]
 
-    def _image(self, tex, bump: bool) -> tuple[int, int, int]:
+    def _image(self, tex, bump: bool) -> tuple[int, int, int, int]:
         path = tex._path if tex._path is not None else Path(tex.file).expanduser().resolve()
         key = (path, bump)
         if key not in self.images:
             texels = load_texels(path, bump)
             h, w = texels.shape[:2]
-            self.images[key] = (self.n_pixels, w, h)
-            self.pixels.append(texels[::-1].reshape(-1, 3))  # bottom row first: v = 0 at the bottom
-            self.n_pixels += w * h
+            levels = mip_levels(texels[::-1]) if self.mipmaps and not bump else [texels[::-1]]  # bottom row first: v = 0 at the bottom
+            self.images[key] = (self.n_pixels, w, h, len(levels))
+            for level in levels:
+                self.pixels.append(level.reshape(-1, 3))
+                self.n_pixels += level.shape[0] * level.shape[1]
         return self.images[key]
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray]:
         info = np.array(self.infos, dtype=np.float64).reshape(-1, T.TEX_SIZE)
         pixels = np.concatenate(self.pixels) if self.pixels else np.zeros((0, 3))
         return np.ascontiguousarray(info), np.ascontiguousarray(pixels, dtype=np.float32)
+
+
+def mip_levels(texels: np.ndarray) -> list[np.ndarray]:
+    """The mip-map pyramid of (H, W, 3) texels, level 0 first: each next level max(1, w // 2) × max(1, h // 2),
+    every texel the area-weighted mean of the texels of the level above that its footprint covers (a box
+    filter; for even sizes, the mean of 2 × 2), down to 1 × 1."""
+    levels = [np.asarray(texels, np.float32)]
+    while levels[-1].shape[0] > 1 or levels[-1].shape[1] > 1:
+        top = levels[-1].astype(np.float64)
+        h, w = top.shape[:2]
+        top = _shrink(top, max(1, h // 2), axis=0)
+        levels.append(_shrink(top, max(1, w // 2), axis=1).astype(np.float32))
+    return levels
+
+
+def _shrink(a: np.ndarray, m: int, axis: int) -> np.ndarray:
+    """`a` box-filtered along `axis` from n to m <= n samples: output i averages the input over
+    [i·n/m, (i + 1)·n/m), each input sample weighted by its overlap (at most n/m + 1 of them)."""
+    n = a.shape[axis]
+    if m == n:
+        return a
+    lo = np.arange(m) * (n / m)
+    taps = int(np.ceil(n / m)) + 1
+    j = np.floor(lo).astype(np.int64)[:, None] + np.arange(taps)[None, :]  # (m, taps) candidate inputs
+    weight = np.clip(np.minimum(lo[:, None] + n / m, j + 1) - np.maximum(lo[:, None], j), 0.0, None)
+    weight /= weight.sum(axis=1, keepdims=True)
+    a = np.moveaxis(a, axis, 0)
+    out = np.zeros((m,) + a.shape[1:])
+    for k in range(taps):
+        out += weight[:, k].reshape((m,) + (1,) * (a.ndim - 1)) * a[np.minimum(j[:, k], n - 1)]
+    return np.moveaxis(out, 0, axis)
 
 
 def load_texels(path, bump: bool = False) -> np.ndarray:

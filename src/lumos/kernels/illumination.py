@@ -148,17 +148,23 @@ def phong(n, L, V, mat, Id, Is, w):
 @njit_inline
 def phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w):
     """`phong` with the coefficients given as (r, g, b) tuples (a textured surface's, which vary per point)."""
+    d, s = phong_terms(n, L, V, kd, ks, shininess, Id, Is, w)
+    return d[0] + s[0], d[1] + s[1], d[2] + s[2]
+
+
+@njit_inline
+def phong_terms(n, L, V, kd, ks, shininess, Id, Is, w):
+    """One light's diffuse term Kd·Id·(N·L)·w and specular term Ks·Is·(R·V)^n·w, apart: ((r, g, b), (r, g, b))."""
     n_dot_l = dot(n, L)
     if n_dot_l <= 0.0 or w == 0.0:
-        return 0.0, 0.0, 0.0
+        return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     R = madd(mul(L, -1.0), n, 2.0 * n_dot_l)
     r_dot_v = dot(R, V)
     spec = r_dot_v**shininess if r_dot_v > 0.0 else 0.0  # no highlight where R·V <= 0, even for n = 0
-    return (
-        (kd[0] * Id[0] * n_dot_l + ks[0] * Is[0] * spec) * w,
-        (kd[1] * Id[1] * n_dot_l + ks[1] * Is[1] * spec) * w,
-        (kd[2] * Id[2] * n_dot_l + ks[2] * Is[2] * spec) * w,
-    )
+    dw = n_dot_l * w
+    sw = spec * w
+    return ((kd[0] * Id[0] * dw, kd[1] * Id[1] * dw, kd[2] * Id[2] * dw),
+            (ks[0] * Is[0] * sw, ks[1] * Is[1] * sw, ks[2] * Is[2] * sw))
 
 
 @njit
@@ -176,18 +182,29 @@ def illuminate(lit, geo, surf, p, n, n_geo, V, mat_id, seed, pixel, sample, shad
 @njit_inline
 def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack,
                       stack_t, time):
-    """The classic model with the coefficients given as (r, g, b) tuples (a textured surface's vary per point).
+    """The classic model with the coefficients given as (r, g, b) tuples (a textured surface's vary per point):
+    the sum of `illuminate_terms`. Returns ((r, g, b), shadow rays traced)."""
+    a, d, s, rays = illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample,
+                                     shadows, stack, stack_t, time)
+    return (a[0] + d[0] + s[0], a[1] + d[1] + s[1], a[2] + d[2] + s[2]), rays
+
+
+@njit_inline
+def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack,
+                     stack_t, time):
+    """The classic model's three terms apart: (ambient Ka·Ia, diffuse Σ Kd·Id·(N·L), specular Σ Ks·Is·(R·V)^n,
+    shadow rays traced), each term an (r, g, b) tuple, each light's share multiplied by its shadow transmittance.
 
     `lit`, `geo` and `surf` are the `layout.Lighting`, `Geometry` and `Surfaces` views; n is the shading normal
     and n_geo the geometric one, both on the viewer's side. With `shadows`, each light sample is tested by a
-    shadow ray that transparent objects attenuate (`shadow_transmittance`); raycast passes False. Returns
-    ((r, g, b), shadow rays traced). Random numbers for area-light samples come from
-    (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on nothing else.
+    shadow ray that transparent objects attenuate (`shadow_transmittance`); raycast passes False. Random
+    numbers for area-light samples come from (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on
+    nothing else.
     """
     amb = lit.ambient
-    r = ka[0] * amb[0]
-    g = ka[1] * amb[1]
-    b = ka[2] * amb[2]
+    ambient = (ka[0] * amb[0], ka[1] * amb[1], ka[2] * amb[2])
+    dr = dg = db = 0.0
+    sr = sg = sb = 0.0
     rays = 0
     dim = DIM_LIGHTS
     for j in range(lit.light_kind.shape[0]):
@@ -212,11 +229,14 @@ def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, see
                 rays += extra
                 if tr == 0.0 and tg == 0.0 and tb == 0.0:
                     continue
-            cr, cg, cb = phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w * inv_n)
-            r += cr * tr
-            g += cg * tg
-            b += cb * tb
-    return (r, g, b), rays
+            d, sp = phong_terms(n, L, V, kd, ks, shininess, Id, Is, w * inv_n)
+            dr += d[0] * tr
+            dg += d[1] * tg
+            db += d[2] * tb
+            sr += sp[0] * tr
+            sg += sp[1] * tg
+            sb += sp[2] * tb
+    return ambient, (dr, dg, db), (sr, sg, sb), rays
 
 
 @njit_inline

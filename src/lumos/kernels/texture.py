@@ -28,13 +28,31 @@ Everything is a tuple of float64; nothing allocates.
     TEX_OFFSET, TEX_WIDTH, TEX_HEIGHT   image: its first texel in tex_pixels, and its size in texels
     TEX_APPLY      bit mask of the coefficients the colour replaces: APPLY_KA | APPLY_KD | APPLY_KS | APPLY_KR
     TEX_STRENGTH   bump maps: the height scale (world units of displacement per unit of height)
-    column 15      unused
+    TEX_LEVELS     colour images: how many mip-map levels follow one another from OFFSET (1: the image alone)
 
 tex_pixels: float32 (m, 3). An image of W×H texels occupies rows OFFSET .. OFFSET + W·H − 1, bottom image row
 first: texel (i, j) is `tex_pixels[OFFSET + j·W + i]`, centred at uv ((i + 0.5)/W, (j + 0.5)/H), so v = 0 is the
 bottom of the picture and images appear upright on a sphere's latitude–longitude map and on planar maps.
 Colour textures hold linear RGB (decoded from sRGB at compile time); bump maps hold the Rec. 709 luminance of
-the file's raw (not decoded) values in all three channels, a height in [0, 1].
+the file's raw (not decoded) values in all three channels, a height in [0, 1]. A colour image's mip-map levels
+follow it: level k + 1 is level k box-filtered to max(1, w_k // 2) × max(1, h_k // 2) texels (in linear RGB),
+stored the same way right after level k.
+
+## Filtering by the footprint (the scan-line renderer's textures)
+
+`texture_rgb_filtered` / `material_coeffs_filtered` take the screen-space derivatives of (u, v), a footprint
+(du/dx, dv/dx, du/dy, dv/dy) per pixel, and filter each pattern over it; a zero footprint gives exactly the
+point lookup of `texture_rgb` (what the ray methods use).
+
+    image    trilinear mip-mapping (Williams 1983): the level of detail λ = log2 of the longer of the two
+             footprint axes measured in level-0 texels, bilinear in levels ⌊λ⌋ and ⌊λ⌋ + 1, blended by λ's
+             fraction; λ <= 0 is the bilinear lookup itself (magnification), λ beyond the last level its texel
+    checker, stripes   box-filtered in closed form (as pbrt's checkerboard does): over a box of half-widths
+             (ds, dt) = the larger footprint component along each axis, the fraction of "odd" cells along s is
+             (C(s + ds) − C(s − ds)) / 2ds with C(x) = ⌊x/2⌋ + 2·max(x/2 − ⌊x/2⌋ − ½, 0) the integral of the
+             odd-cell indicator; the checker's odd fraction is f_s(1 − f_t) + f_t(1 − f_s), and the colour the
+             blend of COLOR0 and COLOR1 by it. Far away both fade to their mean instead of aliasing.
+    noise    point-sampled (its features are larger than a cell of the lattice and it has no hard edges)
 
 ## Patterns (at the scaled coordinates (s, t))
 
@@ -96,6 +114,7 @@ TEX_WIDTH = 11
 TEX_HEIGHT = 12
 TEX_APPLY = 13
 TEX_STRENGTH = 14
+TEX_LEVELS = 15
 TEX_SIZE = 16
 
 # TEX_KIND values
@@ -154,14 +173,51 @@ def texture_rgb(tex, row, u, v, p):
 
 
 @njit
+def texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy):
+    """`texture_rgb` filtered over the pixel footprint (du/dx, dv/dx, du/dy, dv/dy) (see the module doc)."""
+    info = tex.tex_info[row]
+    kind = info[TEX_KIND]
+    if kind == TEXTURE_NOISE or (dudx == 0.0 and dvdx == 0.0 and dudy == 0.0 and dvdy == 0.0):
+        return texture_rgb(tex, row, u, v, p)
+    if info[TEX_WRAP] == WRAP_CLAMP:
+        u = min(max(u, 0.0), _CLAMP_MAX)
+        v = min(max(v, 0.0), _CLAMP_MAX)
+    su = info[TEX_SCALE_U]
+    sv = info[TEX_SCALE_V]
+    if kind == TEXTURE_IMAGE:
+        w = info[TEX_WIDTH] * su
+        h = info[TEX_HEIGHT] * sv
+        ax = (dudx * w) ** 2 + (dvdx * h) ** 2
+        ay = (dudy * w) ** 2 + (dvdy * h) ** 2
+        longest = max(ax, ay)  # squared, in level-0 texels
+        if not (longest > 1.0) or info[TEX_LEVELS] <= 1.0:  # magnified (or NaN): bilinear
+            return _bilinear(tex.tex_pixels, info, su * u, sv * v, su, sv)
+        lod = 0.5 * math.log2(longest) if longest < 1e300 else 1e9
+        return _trilinear(tex.tex_pixels, info, su * u, sv * v, su, sv, lod)
+    fs = _odd_fraction(su * u, su * max(abs(dudx), abs(dudy)))
+    if kind == TEXTURE_CHECKER:
+        ft = _odd_fraction(sv * v, sv * max(abs(dvdx), abs(dvdy)))
+        x = fs * (1.0 - ft) + ft * (1.0 - fs)
+    else:  # stripes
+        x = fs
+    y = 1.0 - x
+    c0, c1 = TEX_COLOR0, TEX_COLOR1
+    return (y * info[c0] + x * info[c1], y * info[c0 + 1] + x * info[c1 + 1], y * info[c0 + 2] + x * info[c1 + 2])
+
+
+@njit
 def _bilinear(pixels, info, s, t, su, sv):
     """Bilinear filtering between texel centres at scaled coordinates (s, t) (one image per unit square)."""
-    w = np.int64(info[TEX_WIDTH])
-    h = np.int64(info[TEX_HEIGHT])
-    offset = np.int64(info[TEX_OFFSET])
+    return _bilinear_level(pixels, np.int64(info[TEX_OFFSET]), np.int64(info[TEX_WIDTH]), np.int64(info[TEX_HEIGHT]),
+                           info[TEX_WRAP] == WRAP_CLAMP, s, t, su, sv)
+
+
+@njit_inline
+def _bilinear_level(pixels, offset, w, h, clamp, s, t, su, sv):
+    """`_bilinear` on the w × h texels from row `offset` of `pixels` (one mip-map level)."""
     x = s * w - 0.5
     y = t * h - 0.5
-    if info[TEX_WRAP] == WRAP_CLAMP:  # stop at the centres of the first and last texels of the strip
+    if clamp:  # stop at the centres of the first and last texels of the strip
         x = min(max(x, 0.0), max(su * w - 1.0, 0.0))
         y = min(max(y, 0.0), max(sv * h - 1.0, 0.0))
     xf = math.floor(x)
@@ -185,6 +241,50 @@ def _bilinear(pixels, info, s, t, su, sv):
     bl = (w00 * np.float64(pixels[a + i0, 2]) + w10 * np.float64(pixels[a + i1, 2])
           + w01 * np.float64(pixels[b + i0, 2]) + w11 * np.float64(pixels[b + i1, 2]))
     return r, g, bl
+
+
+@njit
+def _trilinear(pixels, info, s, t, su, sv, lod):
+    """Trilinear mip-map lookup at level of detail `lod` (> 0; see the module doc)."""
+    offset = np.int64(info[TEX_OFFSET])
+    w = np.int64(info[TEX_WIDTH])
+    h = np.int64(info[TEX_HEIGHT])
+    clamp = info[TEX_WRAP] == WRAP_CLAMP
+    last = np.int64(info[TEX_LEVELS]) - 1
+    if lod >= last:
+        lo = last
+        frac = 0.0
+    else:
+        lo = np.int64(math.floor(lod))
+        frac = lod - lo
+    for _ in range(lo):  # walk to level lo
+        offset += w * h
+        w = max(np.int64(1), w // 2)
+        h = max(np.int64(1), h // 2)
+    c0 = _bilinear_level(pixels, offset, w, h, clamp, s, t, su, sv)
+    if frac == 0.0:
+        return c0
+    offset += w * h
+    c1 = _bilinear_level(pixels, offset, max(np.int64(1), w // 2), max(np.int64(1), h // 2), clamp, s, t, su, sv)
+    a = 1.0 - frac
+    return a * c0[0] + frac * c1[0], a * c0[1] + frac * c1[1], a * c0[2] + frac * c1[2]
+
+
+@njit_inline
+def _odd_integral(x):
+    """∫₀ˣ [⌊y⌋ is odd] dy."""
+    h = math.floor(0.5 * x)
+    return h + 2.0 * max(0.5 * x - h - 0.5, 0.0)
+
+
+@njit_inline
+def _odd_fraction(s, ds):
+    """The fraction of [s − ds, s + ds] where ⌊·⌋ is odd (the point value when ds is 0)."""
+    if ds <= 0.0:
+        return 1.0 if (np.int64(math.floor(s)) & 1) else 0.0
+    if ds >= 1.0e6:
+        return 0.5
+    return (_odd_integral(s + ds) - _odd_integral(s - ds)) / (2.0 * ds)
 
 
 @njit
@@ -253,6 +353,13 @@ def noise01(s, t, period_s, period_t):
 def material_coeffs(tex, mat, u, v, p):
     """(ka, kd, ks, kr), each an RGB tuple: the material row's coefficients, with those named by its texture's
     apply_to mask replaced by the texture colour at (u, v). No texture: the row's own values."""
+    return material_coeffs_filtered(tex, mat, u, v, p, 0.0, 0.0, 0.0, 0.0)
+
+
+@njit_inline
+def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
+    """`material_coeffs` with the texture filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy); a zero
+    footprint is the point lookup."""
     ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
     kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
     ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
@@ -260,7 +367,7 @@ def material_coeffs(tex, mat, u, v, p):
     row = np.int64(mat[MAT_TEXTURE])
     if row < 0:
         return ka, kd, ks, kr
-    color = texture_rgb(tex, row, u, v, p)
+    color = texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy)
     mask = np.int64(tex.tex_info[row, TEX_APPLY])
     if mask & APPLY_KA:
         ka = color

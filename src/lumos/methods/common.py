@@ -8,6 +8,10 @@ import numba
 import numpy as np
 
 from ..errors import LumosError
+from ..scene.model import TERM_AOVS
+
+#: Channels of a method's term buffer (H, W, TERM_CHANNELS): each of TERM_AOVS as (r, g, b), in that order.
+TERM_CHANNELS = 3 * len(TERM_AOVS)
 
 
 @dataclass
@@ -29,6 +33,11 @@ def allocate_aovs(height: int, width: int):
     albedo = np.zeros((height, width, 3), np.float32)
     object_id = np.full((height, width), -1, np.int32)
     return depth, normal, albedo, object_id
+
+
+def term_aovs(terms: np.ndarray) -> dict:
+    """The term AOVs of a (H, W, TERM_CHANNELS) buffer: {"ambient": (H, W, 3) float32, ...}."""
+    return {name: np.ascontiguousarray(terms[:, :, 3 * k:3 * k + 3], np.float32) for k, name in enumerate(TERM_AOVS)}
 
 
 def set_threads(threads: int | None) -> int:

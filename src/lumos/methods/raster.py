@@ -25,20 +25,24 @@ from .. import config
 from ..errors import LumosError
 from ..compile.camera import camera_arrays
 from ..kernels import raster as R
-from ..kernels.illumination import illuminate
+from ..kernels.illumination import illuminate_terms
 from ..kernels.jit import njit, njit_inline, njit_parallel, prange
-from ..kernels.layout import LIGHT_SPHERE, MAT_EMISSION, MAT_KD
+from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_KA,
+                              MAT_KD, MAT_KS, MAT_SHININESS, MAT_TEXTURE)
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
 from ..kernels.surface import shading_side
-from ..kernels.views import geometry_of, lighting_of, surfaces_of
-from .common import Film, allocate_aovs, check_memory, set_threads
+from ..kernels.texture import bump_normal, material_coeffs_filtered
+from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
+from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, set_threads, term_aovs
 
 FLAT, GOURAUD, PHONG = 0, 1, 2
 _SHADING = {"flat": FLAT, "gouraud": GOURAUD, "phong": PHONG}
-#: G-buffer channels: world position, interpolated normal, and (Gouraud) the interpolated intensities of the
-#: side the vertex normals point to and of the other side.
-G_POS, G_NORMAL, G_COLOUR = 0, 3, 6
+#: G-buffer channels: world position, interpolated normal, (u, v) when the scene has textures, then (Gouraud)
+#: the interpolated diffuse and specular light of the side the vertex normals point to and of the other side.
+G_POS, G_NORMAL, G_UV = 0, 3, 6
+#: The display of precomputed colours (radiosity): position, normal, colour.
+G_COLOUR = 6
 _CHUNK = 2048
 
 
@@ -75,15 +79,77 @@ def _facing(n, V):
     return n[0] * s, n[1] * s, n[2] * s
 
 
+@njit_inline
+def _surface_at(tex, mat, p, n, u, v, frame, footprint):
+    """(ka, kd, ks, shading normal): the material's coefficients at (u, v), filtered over `footprint` (du/dx,
+    dv/dx, du/dy, dv/dy), and n tilted by its bump map (the polygon's ∂p/∂u, ∂p/∂v in frame[0:6])."""
+    ka, kd, ks, _ = material_coeffs_filtered(tex, mat, u, v, p, footprint[0], footprint[1], footprint[2],
+                                             footprint[3])
+    if mat[MAT_BUMP] >= 0.0:
+        n = bump_normal(tex, mat, u, v, p, n, (frame[0], frame[1], frame[2]), (frame[3], frame[4], frame[5]))
+    return ka, kd, ks, n
+
+
+@njit_inline
+def _footprint(cam_vecs, ortho, pixel_size, p, fn, frame):
+    """(du/dx, dv/dx, du/dy, dv/dy) at point p of a polygon with unit face normal fn: where the rays through the
+    neighbouring pixels meet the polygon's plane (ray differentials), carried to (u, v) by the polygon's
+    gradients ∇u, ∇v (frame[6:12]). A plane seen edge-on gets an enormous footprint (its texture's mean)."""
+    rx, ry, rz = cam_vecs[1, 0], cam_vecs[1, 1], cam_vecs[1, 2]
+    ux, uy, uz = cam_vecs[2, 0], cam_vecs[2, 1], cam_vecs[2, 2]
+    big = 1e30
+    dpx = (big, big, big)
+    dpy = (big, big, big)
+    if ortho:
+        fx, fy, fz = -cam_vecs[3, 0], -cam_vecs[3, 1], -cam_vecs[3, 2]
+        nf = fn[0] * fx + fn[1] * fy + fn[2] * fz
+        if abs(nf) > 1e-12:
+            a = -pixel_size * (fn[0] * rx + fn[1] * ry + fn[2] * rz) / nf
+            dpx = (pixel_size * rx + a * fx, pixel_size * ry + a * fy, pixel_size * rz + a * fz)
+            b = -pixel_size * (fn[0] * ux + fn[1] * uy + fn[2] * uz) / nf
+            dpy = (pixel_size * ux + b * fx, pixel_size * uy + b * fy, pixel_size * uz + b * fz)
+    else:
+        dx, dy, dz = p[0] - cam_vecs[0, 0], p[1] - cam_vecs[0, 1], p[2] - cam_vecs[0, 2]
+        depth = -(dx * cam_vecs[3, 0] + dy * cam_vecs[3, 1] + dz * cam_vecs[3, 2])
+        step = depth * pixel_size
+        nd = fn[0] * dx + fn[1] * dy + fn[2] * dz
+        for axis in range(2):
+            ex, ey, ez = (rx, ry, rz) if axis == 0 else (ux, uy, uz)
+            qx, qy, qz = dx + step * ex, dy + step * ey, dz + step * ez
+            nq = fn[0] * qx + fn[1] * qy + fn[2] * qz
+            if nq * nd > 0.0:
+                t = nd / nq
+                d = (t * qx - dx, t * qy - dy, t * qz - dz)
+                if abs(d[0]) + abs(d[1]) + abs(d[2]) < big:
+                    if axis == 0:
+                        dpx = d
+                    else:
+                        dpy = d
+    gu = (frame[6], frame[7], frame[8])
+    gv = (frame[9], frame[10], frame[11])
+    return (gu[0] * dpx[0] + gu[1] * dpx[1] + gu[2] * dpx[2], gv[0] * dpx[0] + gv[1] * dpx[1] + gv[2] * dpx[2],
+            gu[0] * dpy[0] + gu[1] * dpy[1] + gu[2] * dpy[2], gv[0] * dpy[0] + gv[1] * dpy[1] + gv[2] * dpy[2])
+
+
+_NO_FOOTPRINT = (0.0, 0.0, 0.0, 0.0)
+
+
 @njit_parallel
-def _light_points(sa, points, normals, materials_of, cam_vecs, ortho, seed, shadows, out, rays):
-    """The model at each point (flat: polygon centroids, their normals turned to the viewer) → out[:, 0:3];
-    with out (n, 6) (Gouraud vertices) the normal is used as given for out[:, 0:3] and reversed for
-    out[:, 3:6], the intensities of the side the normal points to and of the other side: which side the
-    viewer sees is known per pixel, from the polygon's face normal."""
+def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out,
+                  rays):
+    """The vertex (or polygon) stage of the illumination model.
+
+    Flat (`gouraud` False): at each polygon's centroid, with its face normal turned to the viewer and its
+    material's coefficients at the centroid's (u, v) (bumped by its bump map), out[i] = (ambient, diffuse,
+    specular, Kd), 12 values. Gouraud: at each vertex, the light that reaches it with unit coefficients (Kd = Ks = 1;
+    the texture, or the material's own Kd and Ks, multiplies it per pixel), out[i] = (diffuse, specular) light on
+    the side the normal points to, then on the other side, 12 values: which side the viewer sees is known per
+    pixel, from the polygon's face normal."""
     n_points = points.shape[0]
+    one = (1.0, 1.0, 1.0)
+    zero = (0.0, 0.0, 0.0)
     for c in prange((n_points + _CHUNK - 1) // _CHUNK):
-        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
+        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         stack = np.empty(config.BVH_STACK, np.int64)
         stack_t = np.empty(config.BVH_STACK)
         count = 0
@@ -91,42 +157,55 @@ def _light_points(sa, points, normals, materials_of, cam_vecs, ortho, seed, shad
             p = (points[i, 0], points[i, 1], points[i, 2])
             V = _toward_eye(p, cam_vecs, ortho)
             n = (normals[i, 0], normals[i, 1], normals[i, 2])
-            if out.shape[1] == 3:
-                n = _facing(n, V)
-            (r, g, b), extra = illuminate(lit, geo, surf, p, n, n, V, materials_of[i], seed, i, 0, shadows, stack,
-                                          stack_t, 0.0)
-            out[i, 0] = r
-            out[i, 1] = g
-            out[i, 2] = b
-            count += extra
-            if out.shape[1] == 6:
-                back = (-n[0], -n[1], -n[2])
-                (r, g, b), extra = illuminate(lit, geo, surf, p, back, back, V, materials_of[i], seed, i, 1, shadows,
-                                              stack, stack_t, 0.0)
-                out[i, 3] = r
-                out[i, 4] = g
-                out[i, 5] = b
+            mat = lit.materials[materials_of[i]]
+            ka, kd, ks, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frames[i], _NO_FOOTPRINT)
+            if not gouraud:
+                n_f = _facing(n, V)
+                n_s = _facing(n_b, n_f)
+                a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_f, V, ka, kd, ks, mat[MAT_SHININESS],
+                                                   seed, i, 0, shadows, stack, stack_t, 0.0)
+                for k in range(3):
+                    out[i, k] = a[k]
+                    out[i, 3 + k] = d[k]
+                    out[i, 6 + k] = sp[k]
+                    out[i, 9 + k] = kd[k]
+                count += extra
+                continue
+            for side in range(2):
+                sgn = 1.0 if side == 0 else -1.0
+                n_s = (sgn * n_b[0], sgn * n_b[1], sgn * n_b[2])
+                n_g = (sgn * n[0], sgn * n[1], sgn * n[2])
+                _, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, zero, one, one,
+                                                   mat[MAT_SHININESS], seed, i, side, shadows, stack, stack_t, 0.0)
+                for k in range(3):
+                    out[i, 6 * side + k] = d[k]
+                    out[i, 6 * side + 3 + k] = sp[k]
                 count += extra
         rays[c] = count
 
 
 @njit_parallel
-def _shade(sa, ids, gbuf, prim_info, prim_normal, prim_colour, cam_vecs, ortho, shading, seed, sample, shadows,
-           weight, accum, aovs, depth, normal, albedo, object_id, rays_per_row):
-    """One shading pass over the G-buffer: adds weight × each pixel's radiance to `accum` (float32); with
-    `aovs` set (the first pass, when any is asked for) it also fills the AOV buffers."""
+def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
+           pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
+           object_id, terms, want_terms, rays_per_row):
+    """One shading pass over the G-buffer: adds weight × each pixel's radiance to `accum` (float32) and, with
+    `want_terms`, weight × its ambient, diffuse, specular and emitted terms to terms[..., 0:12]; with `aovs` set
+    (the first pass, when any is asked for) it also fills the AOV buffers. `uv_at` is the G-buffer channel of
+    (u, v) (−1: the scene has no textures), `light_at` that of Gouraud's interpolated light."""
     height, width = ids.shape
     for y in prange(height):
-        geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
+        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         stack = np.empty(config.BVH_STACK, np.int64)
         stack_t = np.empty(config.BVH_STACK)
         rays = 0
+        amb = lit.ambient
         for x in range(width):
             prim = ids[y, x]
             if prim < 0:
-                accum[y, x, 0] += weight * sa.background[0]
-                accum[y, x, 1] += weight * sa.background[1]
-                accum[y, x, 2] += weight * sa.background[2]
+                for k in range(3):
+                    accum[y, x, k] += weight * sa.background[k]
+                    if want_terms:
+                        terms[y, x, 9 + k] += weight * sa.background[k]
                 continue
             mat_id = prim_info[prim, 0]
             light = prim_info[prim, 2]
@@ -134,40 +213,62 @@ def _shade(sa, ids, gbuf, prim_info, prim_normal, prim_colour, cam_vecs, ortho, 
             p = (np.float64(gbuf[y, x, G_POS]), np.float64(gbuf[y, x, G_POS + 1]), np.float64(gbuf[y, x, G_POS + 2]))
             V = _toward_eye(p, cam_vecs, ortho)
             fn = (prim_normal[prim, 0], prim_normal[prim, 1], prim_normal[prim, 2])
+            kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
             if shading == FLAT:
                 n_sh = _facing(fn, V)
-                r, g, b = prim_colour[prim, 0], prim_colour[prim, 1], prim_colour[prim, 2]
+                a = (prim_terms[prim, 0], prim_terms[prim, 1], prim_terms[prim, 2])
+                d = (prim_terms[prim, 3], prim_terms[prim, 4], prim_terms[prim, 5])
+                sp = (prim_terms[prim, 6], prim_terms[prim, 7], prim_terms[prim, 8])
+                kd = (prim_terms[prim, 9], prim_terms[prim, 10], prim_terms[prim, 11])  # at the centroid
             else:
                 n_in = _facing((np.float64(gbuf[y, x, G_NORMAL]), np.float64(gbuf[y, x, G_NORMAL + 1]),
                                 np.float64(gbuf[y, x, G_NORMAL + 2])), fn)  # unit, on the face normal's side
                 if n_in[0] == 0.0 and n_in[1] == 0.0 and n_in[2] == 0.0:
                     n_in = fn
+                ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
+                ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
+                if uv_at >= 0 and (mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0):
+                    u = np.float64(gbuf[y, x, uv_at])
+                    v = np.float64(gbuf[y, x, uv_at + 1])
+                    frame = frames[prim]
+                    fp = _footprint(cam_vecs, ortho, pixel_size, p, fn, frame) if mipmap else _NO_FOOTPRINT
+                    if shading == PHONG:
+                        ka, kd, ks, n_in = _surface_at(tex, mat, p, n_in, u, v, frame, fp)
+                    else:  # Gouraud: the texture per pixel; its bumps were applied at the vertices
+                        ka, kd, ks, _ = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
                 n_sh = shading_side(n_in, fn, V)
                 if shading == GOURAUD:
-                    # the intensity of the side the viewer sees: the vertex normals' own side or the other one
+                    # the light on the side the viewer sees: the vertex normals' own side or the other one
                     raw = (gbuf[y, x, G_NORMAL] * fn[0] + gbuf[y, x, G_NORMAL + 1] * fn[1]
                            + gbuf[y, x, G_NORMAL + 2] * fn[2])
                     back = (fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] < 0.0) != (raw < 0.0)
-                    c = G_COLOUR + 3 if back else G_COLOUR
-                    r = np.float64(gbuf[y, x, c])
-                    g = np.float64(gbuf[y, x, c + 1])
-                    b = np.float64(gbuf[y, x, c + 2])
+                    c = light_at + 6 if back else light_at
+                    a = (ka[0] * amb[0], ka[1] * amb[1], ka[2] * amb[2])
+                    d = (kd[0] * np.float64(gbuf[y, x, c]), kd[1] * np.float64(gbuf[y, x, c + 1]),
+                         kd[2] * np.float64(gbuf[y, x, c + 2]))
+                    sp = (ks[0] * np.float64(gbuf[y, x, c + 3]), ks[1] * np.float64(gbuf[y, x, c + 4]),
+                          ks[2] * np.float64(gbuf[y, x, c + 5]))
                 else:
-                    (r, g, b), extra = illuminate(lit, geo, surf, p, n_sh, _facing(fn, V), V, mat_id, seed,
-                                                  y * width + x, sample, shadows, stack, stack_t, 0.0)
+                    a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_sh, _facing(fn, V), V, ka, kd, ks,
+                                                       mat[MAT_SHININESS], seed, y * width + x, sample, shadows,
+                                                       stack, stack_t, 0.0)
                     rays += extra
             # emitted light: one-sided for rect and disk area lights (their winding faces the lit side)
+            e = (0.0, 0.0, 0.0)
             if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] >= 0.0:
-                r += mat[MAT_EMISSION]
-                g += mat[MAT_EMISSION + 1]
-                b += mat[MAT_EMISSION + 2]
-            accum[y, x, 0] += weight * r
-            accum[y, x, 1] += weight * g
-            accum[y, x, 2] += weight * b
+                e = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
+            for k in range(3):
+                accum[y, x, k] += weight * (a[k] + d[k] + sp[k] + e[k])
+            if want_terms:
+                for k in range(3):
+                    terms[y, x, k] += weight * a[k]
+                    terms[y, x, 3 + k] += weight * d[k]
+                    terms[y, x, 6 + k] += weight * sp[k]
+                    terms[y, x, 9 + k] += weight * e[k]
             if aovs:
                 depth[y, x] = _view_depth(cam_vecs, ortho, p)
                 normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_sh
-                albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2]
+                albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = kd
                 object_id[y, x] = prim_info[prim, 1]
         rays_per_row[y] += rays
 
@@ -245,50 +346,75 @@ def render_raster(compiled, camera, settings, progress=None) -> Film:
     sa = compiled.arrays
     shading = _SHADING[settings.shading]
     shadows = bool(settings.shadows)
-    cam_vecs, _ = camera_arrays(camera)
+    cam_vecs, cam_params = camera_arrays(camera)
     ortho = camera.type == "orthographic"
+    half = cam_params[CAM_HALF_SIZE] if ortho else cam_params[CAM_TAN_HALF_FOV]
+    pixel_size = 2.0 * half / height  # one pixel's step in the image plane at unit depth (or in world units)
     seed = np.int64(settings.seed)
     rays = 0
 
-    # vertex stage: the attributes the rasterizer interpolates (and, for Gouraud, the intensity at each vertex)
+    # vertex stage: the attributes the rasterizer interpolates (and, for Gouraud, the light at each vertex)
     nv = len(mesh.positions)
-    k = 12 if shading == GOURAUD else 6
+    textured = sa.tex_info.shape[0] > 0
+    frames = mesh.uv_frames() if textured else np.zeros((mesh.n_prims, 12))
+    uv_at = G_UV if textured else -1
+    light_at = G_UV + 2 if textured else G_UV
+    k = light_at + (12 if shading == GOURAUD else 0)
     attrs = np.empty((nv, k))
     attrs[:, G_POS:G_POS + 3] = mesh.positions
     attrs[:, G_NORMAL:G_NORMAL + 3] = mesh.normals
-    prim_colour = np.zeros((1, 3))
+    if textured:
+        attrs[:, G_UV:G_UV + 2] = mesh.uvs
+    prim_terms = np.zeros((1, 12))
     if shading == GOURAUD and nv:
         vert_material = np.zeros(nv, np.int32)
         vert_material[mesh.prim_index] = np.repeat(mesh.prim_info[:, 0], np.diff(mesh.prim_start))
-        colour = np.zeros((nv, 6))
+        light = np.zeros((nv, 12))
         counts = np.zeros(-(-nv // _CHUNK), np.int64)
-        _light_points(sa, mesh.positions, mesh.normals, vert_material, cam_vecs, ortho, seed, shadows, colour, counts)
-        attrs[:, G_COLOUR:G_COLOUR + 6] = colour
+        _light_points(sa, mesh.positions, mesh.normals, mesh.uvs, _vertex_frames(mesh, frames), vert_material,
+                      cam_vecs, ortho, seed, shadows, True, light, counts)
+        attrs[:, light_at:light_at + 12] = light
         rays += int(counts.sum())
     if shading == FLAT and mesh.n_prims:
-        prim_colour = np.zeros((mesh.n_prims, 3))
+        prim_terms = np.zeros((mesh.n_prims, 12))
         counts = np.zeros(-(-mesh.n_prims // _CHUNK), np.int64)
-        _light_points(sa, mesh.prim_point, mesh.prim_normal, np.ascontiguousarray(mesh.prim_info[:, 0]),
-                      cam_vecs, ortho, seed, shadows, prim_colour, counts)
+        _light_points(sa, mesh.prim_point, mesh.prim_normal, mesh.prim_uv, frames,
+                      np.ascontiguousarray(mesh.prim_info[:, 0]), cam_vecs, ortho, seed, shadows, False, prim_terms,
+                      counts)
         rays += int(counts.sum())
 
     raster = Rasterizer(mesh, attrs, camera, width, height, settings.cull_backfaces, settings.perspective_correct)
     radiance = np.zeros((height, width, 3), np.float32)
     want_aovs = bool(settings.aov)
+    want_terms = any(name in TERM_AOVS for name in settings.aov)
     depth, normal, albedo, object_id = allocate_aovs(height, width) if want_aovs else allocate_aovs(1, 1)
+    terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
     rays_per_row = np.zeros(height, np.int64)
     offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
     for s, (jx, jy) in enumerate(offsets):
         zbuf, ids, gbuf = raster.draw(jx, jy)
-        _shade(sa, ids, gbuf, mesh.prim_info, mesh.prim_normal, prim_colour, cam_vecs, ortho, np.int64(shading),
-               seed, np.int64(s), shadows, 1.0 / len(offsets), radiance, want_aovs and s == 0,
-               depth, normal, albedo, object_id, rays_per_row)
+        _shade(sa, ids, gbuf, np.int64(uv_at), np.int64(light_at), mesh.prim_info, mesh.prim_normal, prim_terms,
+               frames, cam_vecs, ortho, pixel_size, np.int64(shading), bool(settings.mipmap), seed, np.int64(s),
+               shadows, 1.0 / len(offsets), radiance, want_aovs and s == 0, depth, normal, albedo, object_id,
+               terms, want_terms, rays_per_row)
         if progress is not None:
             progress((s + 1) / len(offsets))
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
                 "samples": np.full((height, width), len(offsets), np.int32)}
+    if want_terms:
+        all_aovs.update(term_aovs(terms))
     aovs = {name: all_aovs[name] for name in settings.aov}
     return Film(radiance, aovs, rays + int(rays_per_row.sum()), threads)
+
+
+def _vertex_frames(mesh, frames):
+    """Per vertex, ∂p/∂u and ∂p/∂v for bump maps at the vertices (Gouraud): the sums of the frames of the
+    polygons around it (columns 6:12, the gradients, are not needed there and stay zero)."""
+    out = np.zeros((len(mesh.positions), 12))
+    counts = np.diff(mesh.prim_start)
+    owner = np.repeat(np.arange(mesh.n_prims), counts)
+    np.add.at(out[:, :6], mesh.prim_index, frames[owner, :6])
+    return out
 
 
 # -------------------------------------------------------------------- drawing precomputed colours (radiosity)

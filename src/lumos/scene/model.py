@@ -80,7 +80,10 @@ class Camera(StrictModel):
 
 # ------------------------------------------------------------------------------------------ render settings
 
-AOV_NAMES = ("depth", "normal", "albedo", "object_id", "samples", "variance", "noisy")
+AOV_NAMES = ("depth", "normal", "albedo", "object_id", "samples", "variance", "noisy", "ambient", "diffuse",
+             "specular", "emitted", "reflected", "transmitted")
+#: AOVs of the classic model's terms (raycast, raster, whitted): they add up to the image.
+TERM_AOVS = ("ambient", "diffuse", "specular", "emitted", "reflected", "transmitted")
 #: AOVs only the path tracer makes: the variance of each pixel's mean, and the image before denoising.
 PATH_AOVS = ("variance", "noisy")
 #: `max_depth` of each method when the scene and the flags leave it unset (None: unbounded, roulette ends paths).
@@ -131,14 +134,16 @@ class RenderSettings(StrictModel):
     shading: Literal["flat", "gouraud", "phong"] = "phong"
     exposure: Positive = 1.0
     threads: Optional[Annotated[int, Field(ge=1, le=1024)]] = None
-    aov: list[Literal["depth", "normal", "albedo", "object_id", "samples", "variance", "noisy"]] = Field(
-        default_factory=list)
+    aov: list[Literal["depth", "normal", "albedo", "object_id", "samples", "variance", "noisy", "ambient", "diffuse",
+                      "specular", "emitted", "reflected", "transmitted"]] = Field(default_factory=list)
     # anti-aliasing of the ray methods: `spp` jittered samples (supersample) or the classic adaptive method
     antialias: Literal["none", "supersample", "adaptive"] = "supersample"
     adaptive_threshold: Positive = 0.03
     adaptive_depth: Annotated[int, Field(ge=0, le=6)] = 3
     # scan-line rendering (method: raster)
     perspective_correct: bool = True
+    #: raster: filter textures over each pixel's footprint (mip-mapped images, box-filtered checker and stripes)
+    mipmap: bool = True
     cull_backfaces: bool = False
     shadows: bool = False
     tessellation: Annotated[int, Field(ge=3, le=4096)] = 48
