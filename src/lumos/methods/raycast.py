@@ -13,7 +13,7 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray
-from ..kernels.illumination import illuminate_coeffs
+from ..kernels.illumination import illuminate_terms
 from ..kernels.jit import njit, njit_parallel, prange
 from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
@@ -22,12 +22,13 @@ from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
 from ..errors import LumosError
-from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
+from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
 
 
 @njit
 def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stack, stack_t):
-    """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays)."""
+    """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays,
+    (ambient, diffuse, specular, emitted))."""
     t, ref, b1, b2, part = hit
     p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
     mat = lit.materials[mat_id]
@@ -43,21 +44,25 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
     # the shading normal on the viewer's side of the surface (DESIGN.md §3: two-sided surfaces)
     n_sh = shading_side(n_sh, n_geo, V)
     n_g = n_geo if dot(n_geo, V) >= 0.0 else mul(n_geo, -1.0)
-    (r, g, b), rays = illuminate_coeffs(lit, geo, surf, p, n_sh, n_g, V, ka, kd, ks, mat[MAT_SHININESS], seed, pixel,
-                                        sample, shadows, stack, stack_t, 0.0)
-    rgb = (r + emit * mat[MAT_EMISSION], g + emit * mat[MAT_EMISSION + 1], b + emit * mat[MAT_EMISSION + 2])
-    return rgb, n_sh, kd, object_id, rays
+    a, dif, spec, rays = illuminate_terms(lit, geo, surf, p, n_sh, n_g, V, ka, kd, ks, mat[MAT_SHININESS], seed,
+                                          pixel, sample, shadows, stack, stack_t, 0.0)
+    e = (emit * mat[MAT_EMISSION], emit * mat[MAT_EMISSION + 1], emit * mat[MAT_EMISSION + 2])
+    rgb = (a[0] + dif[0] + spec[0] + e[0], a[1] + dif[1] + spec[1] + e[1], a[2] + dif[2] + spec[2] + e[2])
+    return rgb, n_sh, kd, object_id, rays, (a, dif, spec, e)
 
 
 @njit_parallel
 def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
-                  radiance, depth, normal, albedo, object_id, rays_per_row):
+                  radiance, depth, normal, albedo, object_id, terms, want_terms, rays_per_row):
+    """One band of rows: `spp` camera rays per pixel, box-filtered; with `want_terms`, the mean of the samples'
+    terms (ambient, diffuse, specular, emitted; reflected and transmitted stay 0) in terms[y, x, :18]."""
     for y in prange(y0, y1):
         # per row: parfor bodies cannot capture a namedtuple built outside them
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         stack = np.empty(config.BVH_STACK, np.int64)
         stack_t = np.empty(config.BVH_STACK)
         rays = 0
+        inv = 1.0 / spp
         for x in range(width):
             pixel = y * width + x
             r = g = b = 0.0
@@ -70,10 +75,17 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                     r += sa.background[0]
                     g += sa.background[1]
                     b += sa.background[2]
+                    if want_terms:  # what a ray that misses sees counts as emitted (DESIGN.md: term AOVs)
+                        for k in range(3):
+                            terms[y, x, 9 + k] += inv * sa.background[k]
                     continue
-                rgb, n_sh, kd, obj, extra = shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, s, False, stack,
-                                                      stack_t)
+                rgb, n_sh, kd, obj, extra, parts = shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, s, False,
+                                                             stack, stack_t)
                 rays += extra
+                if want_terms:
+                    for j in range(4):
+                        for k in range(3):
+                            terms[y, x, 3 * j + k] += inv * parts[j][k]
                 r += rgb[0]
                 g += rgb[1]
                 b += rgb[2]
@@ -82,7 +94,6 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                     normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_sh
                     albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = kd
                     object_id[y, x] = obj
-            inv = 1.0 / spp
             radiance[y, x, 0] = r * inv
             radiance[y, x, 1] = g * inv
             radiance[y, x, 2] = b * inv
@@ -104,13 +115,17 @@ def render_raycast(compiled, camera, settings, progress=None) -> Film:
     cam_vecs, cam_params = camera_arrays(camera)
     radiance = np.zeros((height, width, 3), np.float32)
     depth, normal, albedo, object_id = allocate_aovs(height, width)
+    want_terms = any(name in TERM_AOVS for name in settings.aov)
+    terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
     rays_per_row = np.zeros(height, np.int64)
     for y0, y1 in row_bands(height):
         _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, y0, y1, spp, settings.seed,
-                      radiance, depth, normal, albedo, object_id, rays_per_row)
+                      radiance, depth, normal, albedo, object_id, terms, want_terms, rays_per_row)
         if progress is not None:
             progress(y1 / height)
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
                 "samples": np.full((height, width), spp, np.int32)}
+    if want_terms:
+        all_aovs.update(term_aovs(terms))
     aovs = {name: all_aovs[name] for name in settings.aov}
     return Film(radiance, aovs, int(rays_per_row.sum()), threads, primary_rays=width * height * spp)

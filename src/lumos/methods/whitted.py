@@ -30,7 +30,7 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray, camera_ray_at
-from ..kernels.illumination import illuminate_coeffs, is_solid
+from ..kernels.illumination import illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from ..kernels.layout import (
     LIGHT_SPHERE,
@@ -48,7 +48,7 @@ from ..kernels.traverse import closest_hit
 from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..errors import LumosError
-from .common import Film, allocate_aovs, check_memory, row_bands, set_threads
+from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
 
 #: Secondary rays whose path weight (largest channel) is below this are not traced.
 CUTOFF = 1e-3
@@ -60,23 +60,44 @@ AA_NONE, AA_SUPERSAMPLE, AA_ADAPTIVE = 0, 1, 2
 _ANTIALIAS = {"none": AA_NONE, "supersample": AA_SUPERSAMPLE, "adaptive": AA_ADAPTIVE}
 
 
+#: Columns of a ray-tree log row (`lumos.explain`): one row per ray traced from a camera ray.
+LOG_PARENT, LOG_KIND, LOG_DEPTH, LOG_ORIGIN, LOG_DIR, LOG_WEIGHT, LOG_T, LOG_OBJECT, LOG_MATERIAL = 0, 1, 2, 3, 6, 9, 12, 13, 14
+LOG_POINT, LOG_NORMAL, LOG_NGEO, LOG_AMBIENT, LOG_DIFFUSE, LOG_SPECULAR, LOG_EMITTED = 15, 18, 21, 24, 27, 30, 33
+LOG_WR, LOG_WT, LOG_ENTERING, LOG_ETA, LOG_FRESNEL, LOG_TIR, LOG_BACKGROUND, LOG_UV = 36, 39, 42, 43, 44, 45, 46, 49
+LOG_KA, LOG_KD, LOG_KS, LOG_TIME = 51, 54, 57, 60
+LOG_COLS = 61
+#: Ray kinds in the log (LOG_KIND), and the branch of the tree a ray is in (the term its light counts for).
+RAY_CAMERA, RAY_REFLECTED, RAY_TRANSMITTED = 0, 1, 2
+#: Term channels (as `common.TERM_CHANNELS`): ambient, diffuse, specular, emitted, reflected, transmitted.
+T_AMBIENT, T_DIFFUSE, T_SPECULAR, T_EMITTED, T_REFLECTED, T_TRANSMITTED = 0, 3, 6, 9, 12, 15
+
+
 @njit_alloc
-def _scratch(max_depth):
-    """Per-thread work arrays for `trace`: the ray stack (origin, direction, weight; depth, media count;
-    media objects and indices of refraction) and the BVH traversal stack."""
+def _scratch(max_depth, log_rows=0):
+    """Per-thread work arrays for `trace`: the ray stack (origin, direction, weight; depth, media count, branch,
+    log row of the ray that spawned it; media objects and indices of refraction), the BVH traversal stack,
+    the sample's terms (18: see T_*), and the ray-tree log (`log_rows` rows, none by default; its count is −1
+    when logging is off)."""
     size = 2 * max_depth + 4  # depth-first: at most one pending sibling per level, plus the ray in hand
-    return (np.empty((size, 9)), np.empty((size, 2), np.int64), np.empty((size, MAX_MEDIA), np.int64),
-            np.empty((size, MAX_MEDIA)), np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
+    log_n = np.full(1, -1 if log_rows == 0 else 0, np.int64)
+    return (np.empty((size, 9)), np.empty((size, 4), np.int64), np.empty((size, MAX_MEDIA), np.int64),
+            np.empty((size, MAX_MEDIA)), np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK),
+            np.zeros(18), np.zeros((max(log_rows, 1), LOG_COLS)), log_n)
 
 
 @njit
-def _push(st_f, st_i, st_mo, st_mi, sp, o, d, w0, w1, w2, depth, n_media, src_mo, src_mi, src, drop, add_obj, add_ior):
+def _push(st_f, st_i, st_mo, st_mi, sp, o, d, w0, w1, w2, depth, n_media, src_mo, src_mi, src, drop, add_obj, add_ior,
+          branch, parent):
     """Push a ray; its media are those of stack entry `src` (already popped, still readable) without object
-    `drop` (>= 0) and with (add_obj, add_ior) appended (add_obj >= 0)."""
+    `drop` (>= 0) and with (add_obj, add_ior) appended (add_obj >= 0). `branch` is the kind of the camera
+    ray's child it descends from (the term it counts for); `parent` the log row of the ray that spawned it
+    (the kind of the ray itself is in the sign: >= 0 reflected, < 0 transmitted, parent = ~value)."""
     st_f[sp, 0], st_f[sp, 1], st_f[sp, 2] = o
     st_f[sp, 3], st_f[sp, 4], st_f[sp, 5] = d
     st_f[sp, 6], st_f[sp, 7], st_f[sp, 8] = w0, w1, w2
     st_i[sp, 0] = depth
+    st_i[sp, 2] = branch
+    st_i[sp, 3] = parent
     m = 0
     for k in range(n_media):
         if src_mo[src, k] == drop:
@@ -94,11 +115,30 @@ def _push(st_f, st_i, st_mo, st_mi, sp, o, d, w0, w1, w2, depth, n_media, src_mo
 
 
 @njit_inline
+def _log3(log, row, col, v):
+    log[row, col] = v[0]
+    log[row, col + 1] = v[1]
+    log[row, col + 2] = v[2]
+
+
+@njit_inline
+def _add_term(tacc, k, w0, w1, w2, c):
+    tacc[k] += w0 * c[0]
+    tacc[k + 1] += w1 * c[1]
+    tacc[k + 2] += w2 * c[2]
+
+
+@njit_inline
 def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scratch, background):
     """Radiance along the camera ray (o, d) at shutter time `time`.
 
-    Returns (rgb, rays traced, (t, n_shading, kd, object id) of the primary hit; t = −1 on a miss)."""
-    st_f, st_i, st_mo, st_mi, stack, stack_t = scratch
+    Returns (rgb, rays traced, (t, n_shading, kd, object id) of the primary hit; t = −1 on a miss). The
+    sample's terms are left in scratch[6] (T_*: the primary hit's ambient, diffuse, specular and emitted light
+    (or the background it misses into), and the light of its reflected and transmitted rays); with logging on,
+    one row per ray in scratch[7] (LOG_*)."""
+    st_f, st_i, st_mo, st_mi, stack, stack_t, tacc, log, log_n = scratch
+    logging = log_n[0] >= 0
+    tacc[:] = 0.0
     r = g = b = 0.0
     rays = 0
     aov_t = -1.0
@@ -111,6 +151,8 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
     st_f[0, 6] = st_f[0, 7] = st_f[0, 8] = 1.0
     st_i[0, 0] = 0
     st_i[0, 1] = 0
+    st_i[0, 2] = RAY_CAMERA
+    st_i[0, 3] = ~np.int64(-1)
     sp = 1
     while sp > 0:
         sp -= 1
@@ -120,6 +162,26 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         w0, w1, w2 = st_f[top, 6], st_f[top, 7], st_f[top, 8]
         depth = st_i[top, 0]
         n_media = st_i[top, 1]
+        branch = st_i[top, 2]
+        row = -1
+        if logging and log_n[0] < log.shape[0]:
+            row = log_n[0]
+            log_n[0] += 1
+            log[row, :] = 0.0
+            code = st_i[top, 3]
+            log[row, LOG_PARENT] = -1 if depth == 0 else (code if code >= 0 else ~code)
+            log[row, LOG_KIND] = RAY_CAMERA if depth == 0 else (RAY_REFLECTED if code >= 0 else RAY_TRANSMITTED)
+            log[row, LOG_DEPTH] = depth
+            _log3(log, row, LOG_ORIGIN, ro)
+            _log3(log, row, LOG_DIR, rd)
+            _log3(log, row, LOG_WEIGHT, (w0, w1, w2))
+            log[row, LOG_T] = -1.0
+            log[row, LOG_OBJECT] = -1
+            log[row, LOG_MATERIAL] = -1
+            log[row, LOG_FRESNEL] = -1.0
+            log[row, LOG_TIME] = time
+        # where this ray's light counts: the primary hit's own terms, or the reflected / transmitted term
+        k_light = T_REFLECTED if branch == RAY_REFLECTED else T_TRANSMITTED
         hit = closest_hit(geo, ro, rd, 0.0, config.T_FAR, stack, stack_t, time)
         rays += 1
         t = hit[0]
@@ -127,6 +189,9 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
             r += w0 * background[0]
             g += w1 * background[1]
             b += w2 * background[2]
+            _add_term(tacc, T_EMITTED if depth == 0 else k_light, w0, w1, w2, background)
+            if row >= 0:
+                _log3(log, row, LOG_BACKGROUND, background)
             continue
         ref = hit[1]
         p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, ro, rd, t, ref, hit[2], hit[3], hit[4], time)
@@ -139,20 +204,44 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         n_s = shading_side(n_sh, n_geo, V)
         n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
         # emitted light: one-sided for rect and disk area lights
+        e = (0.0, 0.0, 0.0)
         if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or entering:
-            r += w0 * mat[MAT_EMISSION]
-            g += w1 * mat[MAT_EMISSION + 1]
-            b += w2 * mat[MAT_EMISSION + 2]
+            e = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
         ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)  # the material's, or its texture's where it has one
         kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
         if depth == 0:
             aov_t, aov_n, aov_kd, aov_obj = t, n_s, kd, obj
-        (lr, lg, lb), extra = illuminate_coeffs(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, mat[MAT_SHININESS],
-                                                seed, pixel, sample, True, stack, stack_t, time)
+        la, ld, ls, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, mat[MAT_SHININESS],
+                                             seed, pixel, sample, True, stack, stack_t, time)
         rays += extra
-        r += w0 * lr
-        g += w1 * lg
-        b += w2 * lb
+        r += w0 * (e[0] + la[0] + ld[0] + ls[0])
+        g += w1 * (e[1] + la[1] + ld[1] + ls[1])
+        b += w2 * (e[2] + la[2] + ld[2] + ls[2])
+        if depth == 0:
+            _add_term(tacc, T_EMITTED, 1.0, 1.0, 1.0, e)
+            _add_term(tacc, T_AMBIENT, 1.0, 1.0, 1.0, la)
+            _add_term(tacc, T_DIFFUSE, 1.0, 1.0, 1.0, ld)
+            _add_term(tacc, T_SPECULAR, 1.0, 1.0, 1.0, ls)
+        else:
+            _add_term(tacc, k_light, w0, w1, w2, (e[0] + la[0] + ld[0] + ls[0], e[1] + la[1] + ld[1] + ls[1],
+                                                  e[2] + la[2] + ld[2] + ls[2]))
+        if row >= 0:
+            log[row, LOG_T] = t
+            log[row, LOG_OBJECT] = obj
+            log[row, LOG_MATERIAL] = mat_id
+            _log3(log, row, LOG_POINT, p)
+            _log3(log, row, LOG_NORMAL, n_s)
+            _log3(log, row, LOG_NGEO, n_g)
+            _log3(log, row, LOG_AMBIENT, la)
+            _log3(log, row, LOG_DIFFUSE, ld)
+            _log3(log, row, LOG_SPECULAR, ls)
+            _log3(log, row, LOG_EMITTED, e)
+            _log3(log, row, LOG_KA, ka)
+            _log3(log, row, LOG_KD, kd)
+            _log3(log, row, LOG_KS, ks)
+            log[row, LOG_UV] = u
+            log[row, LOG_UV + 1] = v
+            log[row, LOG_ENTERING] = 1.0 if entering else 0.0
         if depth >= max_depth:
             continue
         # the weights of the two secondary rays
@@ -181,17 +270,25 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
             eta = n1 / n2
             cos_i = -(rd[0] * n_s[0] + rd[1] * n_s[1] + rd[2] * n_s[2])
             ok, t_dir = refract(rd, n_s, eta)
+            if row >= 0:
+                log[row, LOG_ETA] = eta
+                log[row, LOG_TIR] = 0.0 if ok else 1.0
             if mat[MAT_FRESNEL] != 0.0:
                 if ok:
                     cos_t = -(t_dir[0] * n_s[0] + t_dir[1] * n_s[1] + t_dir[2] * n_s[2])
                     F = schlick(max(cos_i, 0.0), eta, max(cos_t, 0.0))
                 else:
                     F = 1.0
+                if row >= 0:
+                    log[row, LOG_FRESNEL] = F
                 wr0, wr1, wr2 = wr0 + wt0 * F, wr1 + wt1 * F, wr2 + wt2 * F
                 wt0, wt1, wt2 = wt0 * (1.0 - F), wt1 * (1.0 - F), wt2 * (1.0 - F)
             if not ok:  # total internal reflection: the transmitted part goes the mirror way
                 wr0, wr1, wr2 = wr0 + wt0, wr1 + wt1, wr2 + wt2
                 transmit = False
+        if row >= 0:
+            _log3(log, row, LOG_WR, (wr0, wr1, wr2))
+            _log3(log, row, LOG_WT, (wt0, wt1, wt2) if transmit else (0.0, 0.0, 0.0))
         # the reflected ray first: it keeps the incident media, so the entry it overwrites (the ray in hand, already
         # read) still holds them for the transmitted ray's copy
         rw0, rw1, rw2 = w0 * wr0, w1 * wr1, w2 * wr2
@@ -199,13 +296,14 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
             r_dir = reflect(rd, n_s)
             origin = offset_origin(p, n_geo, r_dir, config.RAY_EPSILON)
             sp = _push(st_f, st_i, st_mo, st_mi, sp, origin, r_dir, rw0, rw1, rw2, depth + 1, n_media, st_mo, st_mi,
-                       top, np.int64(-1), np.int64(-1), 1.0)
+                       top, np.int64(-1), np.int64(-1), 1.0, RAY_REFLECTED if depth == 0 else branch, np.int64(row))
         if transmit:
             tw0, tw1, tw2 = w0 * wt0, w1 * wt1, w2 * wt2
             if max(tw0, tw1, tw2) >= CUTOFF:
                 origin = offset_origin(p, n_geo, t_dir, config.RAY_EPSILON)
                 sp = _push(st_f, st_i, st_mo, st_mi, sp, origin, t_dir, tw0, tw1, tw2, depth + 1, n_media, st_mo,
-                           st_mi, top, drop, add_obj, add_ior)
+                           st_mi, top, drop, add_obj, add_ior, RAY_TRANSMITTED if depth == 0 else branch,
+                           ~np.int64(row))
     return (r, g, b), rays, (aov_t, aov_n, aov_kd, aov_obj)
 
 
@@ -229,31 +327,57 @@ def _store_aovs(x, y, info, depth, normal, albedo, object_id):
 
 @njit_parallel
 def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth,
-                 radiance, depth, normal, albedo, object_id, samples, rays_per_row):
-    """antialias none / supersample: `spp` camera rays per pixel (the pixel centre when spp is 1)."""
+                 radiance, depth, normal, albedo, object_id, samples, terms, want_terms, rays_per_row):
+    """antialias none / supersample: `spp` camera rays per pixel (the pixel centre when spp is 1); with
+    `want_terms`, the mean of the samples' terms in terms[y, x, :18]."""
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch(max_depth)
+        tsum = np.zeros(18)
         rays = 0
         for x in range(width):
             pixel = y * width + x
-            r = g = b = 0.0
-            for s in range(spp):
-                o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
-                time = _time_of(cam_time, seed, pixel, s)
-                rgb, n, info = trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, s, scratch, sa.background)
-                rays += n
-                r += rgb[0]
-                g += rgb[1]
-                b += rgb[2]
-                if s == 0:
-                    _store_aovs(x, y, info, depth, normal, albedo, object_id)
-            inv = 1.0 / spp
-            radiance[y, x, 0] = r * inv
-            radiance[y, x, 1] = g * inv
-            radiance[y, x, 2] = b * inv
+            rgb, n = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
+                                  max_depth, scratch, sa.background, depth, normal, albedo, object_id, tsum,
+                                  want_terms)
+            rays += n
+            radiance[y, x, 0], radiance[y, x, 1], radiance[y, x, 2] = rgb
+            if want_terms:
+                for k in range(18):
+                    terms[y, x, k] = tsum[k]
             samples[y, x] = spp
         rays_per_row[y] += rays
+
+
+@njit_inline
+def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed, max_depth,
+                 scratch, background, depth, normal, albedo, object_id, tsum, want_terms):
+    """The mean of pixel (x, y)'s `spp` samples, and the rays traced; AOVs from its first sample; with
+    `want_terms` the mean of its samples' terms in tsum (18). With logging on in `scratch`, every sample's rays
+    go to its log, one tree after another (`lumos.explain`)."""
+    pixel = y * width + x
+    r = g = b = 0.0
+    rays = 0
+    if want_terms:
+        tsum[:] = 0.0
+    for s in range(spp):
+        o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
+        time = _time_of(cam_time, seed, pixel, s)
+        rgb, n, info = trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, s, scratch, background)
+        rays += n
+        r += rgb[0]
+        g += rgb[1]
+        b += rgb[2]
+        if want_terms:
+            for k in range(18):
+                tsum[k] += scratch[6][k]
+        if s == 0:
+            _store_aovs(x, y, info, depth, normal, albedo, object_id)
+    inv = 1.0 / spp
+    if want_terms:
+        for k in range(18):
+            tsum[k] *= inv
+    return (r * inv, g * inv, b * inv), rays
 
 
 @njit_inline
@@ -270,7 +394,8 @@ def _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, f
 @njit_parallel
 def _corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, corners, rays_per_row):
     # rays_per_row here has height + 1 entries, one per row of corners
-    """adaptive, stage 1: one ray through every pixel corner (W+1 × H+1 of them, shared by neighbours)."""
+    """adaptive, stage 1: one ray through every pixel corner (W+1 × H+1 of them, shared by neighbours): its
+    radiance in corners[y, x, 0:3] and, when corners has 21 channels, its terms after it."""
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch(max_depth)
@@ -280,91 +405,122 @@ def _corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed
             rgb, n = _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, np.float64(x),
                             np.float64(y), seed, key, 0, max_depth, scratch, sa.background)
             corners[y, x, 0], corners[y, x, 1], corners[y, x, 2] = rgb
+            for k in range(3, corners.shape[2]):  # the terms, when they are asked for
+                corners[y, x, k] = scratch[6][k - 3]
             rays += n
         rays_per_row[y] += rays
 
 
 @njit_parallel
 def _adaptive_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, threshold,
-                   max_level, corners, radiance, samples, rays_per_row):
-    """adaptive, stage 2: each pixel from its corners, its squares cut in four where the corners differ.
-
-    A pixel's points live on a (2^max_level + 1)² grid, so a point shared by neighbouring squares is traced
-    once; `stamp` marks the points already traced for the current pixel."""
+                   max_level, corners, radiance, samples, terms, rays_per_row):
+    """adaptive, stage 2: each pixel from its corners, its squares cut in four where the corners differ
+    (`adaptive_pixel`); with 21-channel corners, also its terms."""
     cells = np.int64(1) << max_level
     n = cells + 1
+    channels = corners.shape[2]
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch(max_depth)
-        grid = np.empty((n, n, 3))
+        grid = np.empty((n, n, channels))
         stamp = np.full((n, n), -1, np.int64)
+        weights = np.zeros((1, 1))
         stack = np.empty((4 * max_level + 4, 4), np.int64)  # squares: ix, iy, size (in cells), level
+        value = np.empty(channels)
         rays = 0
-        inv = 1.0 / cells
         for x in range(width):
-            pixel = y * width + x
-            key = (height + 1) * (width + 1) + pixel  # random keys of this pixel's extra points
-            for ch in range(3):
-                grid[0, 0, ch] = corners[y, x, ch]
-                grid[0, cells, ch] = corners[y, x + 1, ch]
-                grid[cells, 0, ch] = corners[y + 1, x, ch]
-                grid[cells, cells, ch] = corners[y + 1, x + 1, ch]
-            stamp[0, 0] = stamp[0, cells] = stamp[cells, 0] = stamp[cells, cells] = pixel
-            count = 1  # its own corner ray
-            stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = 0, 0, cells, 0
-            sp = 1
-            r = g = b = 0.0
-            while sp > 0:
-                sp -= 1
-                ix, iy, size, level = stack[sp, 0], stack[sp, 1], stack[sp, 2], stack[sp, 3]
-                # the four corners, as grid rows (iy) and columns (ix)
-                worst = 0.0
-                for ch in range(3):
-                    c0 = min(max(grid[iy, ix, ch], 0.0), 1.0)
-                    c1 = min(max(grid[iy, ix + size, ch], 0.0), 1.0)
-                    c2 = min(max(grid[iy + size, ix, ch], 0.0), 1.0)
-                    c3 = min(max(grid[iy + size, ix + size, ch], 0.0), 1.0)
-                    worst = max(worst, max(c0, c1, c2, c3) - min(c0, c1, c2, c3))
-                if level >= max_level or worst <= threshold:
-                    q = 0.25 * (size * inv) * (size * inv)  # the mean of the corners, weighted by the area
-                    ex, ey = ix + size, iy + size
-                    r += q * (grid[iy, ix, 0] + grid[iy, ex, 0] + grid[ey, ix, 0] + grid[ey, ex, 0])
-                    g += q * (grid[iy, ix, 1] + grid[iy, ex, 1] + grid[ey, ix, 1] + grid[ey, ex, 1])
-                    b += q * (grid[iy, ix, 2] + grid[iy, ex, 2] + grid[ey, ix, 2] + grid[ey, ex, 2])
-                    continue
-                h = size // 2
-                # the five middles (top, left, centre, right, bottom) that are not traced yet
-                for k in range(5):
-                    if k == 0:
-                        px, py = ix + h, iy
-                    elif k == 1:
-                        px, py = ix, iy + h
-                    elif k == 2:
-                        px, py = ix + h, iy + h
-                    elif k == 3:
-                        px, py = ix + size, iy + h
-                    else:
-                        px, py = ix + h, iy + size
-                    if stamp[py, px] == pixel:
-                        continue
-                    stamp[py, px] = pixel
-                    rgb, nr = _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height,
-                                     x + px * inv, y + py * inv, seed, key, py * n + px, max_depth, scratch,
-                                     sa.background)
-                    grid[py, px, 0], grid[py, px, 1], grid[py, px, 2] = rgb
-                    rays += nr
-                    count += 1
-                for k in range(4):
-                    stack[sp, 0] = ix + (k % 2) * h
-                    stack[sp, 1] = iy + (k // 2) * h
-                    stack[sp, 2] = h
-                    stack[sp, 3] = level + 1
-                    sp += 1
-            radiance[y, x, 0] = r
-            radiance[y, x, 1] = g
-            radiance[y, x, 2] = b
+            count, nr = adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed,
+                                       max_depth, threshold, max_level, corners, scratch, sa.background, grid, stamp,
+                                       stack, weights, value)
+            rays += nr
+            radiance[y, x, 0], radiance[y, x, 1], radiance[y, x, 2] = value[0], value[1], value[2]
+            for k in range(3, channels):
+                terms[y, x, k - 3] = value[k]
             samples[y, x] = count
         rays_per_row[y] += rays
+
+
+@njit_inline
+def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth,
+                   threshold, max_level, corners, scratch, background, grid, stamp, stack, weights, value):
+    """Pixel (x, y) by adaptive subdivision: value[:] = the area-weighted mean over its squares of their corners'
+    values (every channel of `corners`: radiance, then the terms if present); returns (camera rays it took, rays
+    traced beyond its corners).
+
+    Its points live on a (2^max_level + 1)² grid, so a point shared by neighbouring squares is traced once;
+    `stamp` marks the points already traced for this pixel. With `weights` (n, n) (`lumos.explain`), each
+    point's weight in the pixel is added to it; with logging on in `scratch`, each new point's tree goes to
+    the log."""
+    cells = np.int64(1) << max_level
+    n = cells + 1
+    inv = 1.0 / cells
+    channels = grid.shape[2]
+    explain = weights.shape[0] == n
+    pixel = y * width + x
+    key = (height + 1) * (width + 1) + pixel  # random keys of this pixel's extra points
+    for ch in range(channels):
+        grid[0, 0, ch] = corners[y, x, ch]
+        grid[0, cells, ch] = corners[y, x + 1, ch]
+        grid[cells, 0, ch] = corners[y + 1, x, ch]
+        grid[cells, cells, ch] = corners[y + 1, x + 1, ch]
+    stamp[0, 0] = stamp[0, cells] = stamp[cells, 0] = stamp[cells, cells] = pixel
+    count = 1  # its own corner ray
+    rays = 0
+    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = 0, 0, cells, 0
+    sp = 1
+    value[:] = 0.0
+    while sp > 0:
+        sp -= 1
+        ix, iy, size, level = stack[sp, 0], stack[sp, 1], stack[sp, 2], stack[sp, 3]
+        # the four corners, as grid rows (iy) and columns (ix)
+        worst = 0.0
+        for ch in range(3):
+            c0 = min(max(grid[iy, ix, ch], 0.0), 1.0)
+            c1 = min(max(grid[iy, ix + size, ch], 0.0), 1.0)
+            c2 = min(max(grid[iy + size, ix, ch], 0.0), 1.0)
+            c3 = min(max(grid[iy + size, ix + size, ch], 0.0), 1.0)
+            worst = max(worst, max(c0, c1, c2, c3) - min(c0, c1, c2, c3))
+        if level >= max_level or worst <= threshold:
+            q = 0.25 * (size * inv) * (size * inv)  # the mean of the corners, weighted by the area
+            ex, ey = ix + size, iy + size
+            for ch in range(channels):
+                value[ch] += q * (grid[iy, ix, ch] + grid[iy, ex, ch] + grid[ey, ix, ch] + grid[ey, ex, ch])
+            if explain:
+                weights[iy, ix] += q
+                weights[iy, ex] += q
+                weights[ey, ix] += q
+                weights[ey, ex] += q
+            continue
+        h = size // 2
+        # the five middles (top, left, centre, right, bottom) that are not traced yet
+        for k in range(5):
+            if k == 0:
+                px, py = ix + h, iy
+            elif k == 1:
+                px, py = ix, iy + h
+            elif k == 2:
+                px, py = ix + h, iy + h
+            elif k == 3:
+                px, py = ix + size, iy + h
+            else:
+                px, py = ix + h, iy + size
+            if stamp[py, px] == pixel:
+                continue
+            stamp[py, px] = pixel
+            rgb, nr = _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height,
+                             x + px * inv, y + py * inv, seed, key, py * n + px, max_depth, scratch, background)
+            grid[py, px, 0], grid[py, px, 1], grid[py, px, 2] = rgb
+            for ch in range(3, channels):
+                grid[py, px, ch] = scratch[6][ch - 3]
+            rays += nr
+            count += 1
+        for k in range(4):
+            stack[sp, 0] = ix + (k % 2) * h
+            stack[sp, 1] = iy + (k // 2) * h
+            stack[sp, 2] = h
+            stack[sp, 3] = level + 1
+            sp += 1
+    return count, rays
 
 
 @njit_parallel
@@ -397,13 +553,15 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
         raise LumosError("render.max_depth: whitted needs a finite number of bounces (-1, unbounded, is for path)")
     max_depth = np.int64(settings.resolved_max_depth())
     mode = _ANTIALIAS[settings.antialias]
+    want_terms = any(name in TERM_AOVS for name in settings.aov)
+    terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
     radiance = np.zeros((height, width, 3), np.float32)
     depth, normal, albedo, object_id = allocate_aovs(height, width)
     samples = np.zeros((height, width), np.int32)
     rays_per_row = np.zeros(height, np.int64)
     bands = row_bands(height)
     if mode == AA_ADAPTIVE:
-        corners = np.zeros((height + 1, width + 1, 3))
+        corners = np.zeros((height + 1, width + 1, 3 + TERM_CHANNELS if want_terms else 3))
         corner_rays = np.zeros(height + 1, np.int64)
         total = len(bands) * 2
         done = 0
@@ -416,7 +574,7 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
         for y0, y1 in bands:
             _adaptive_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
                            np.int64(y1), seed, max_depth, float(settings.adaptive_threshold),
-                           np.int64(settings.adaptive_depth), corners, radiance, samples, rays_per_row)
+                           np.int64(settings.adaptive_depth), corners, radiance, samples, terms, rays_per_row)
             if progress is not None:
                 progress(0.5 + 0.5 * y1 / height)
         if set(settings.aov) & {"depth", "normal", "albedo", "object_id"}:
@@ -428,10 +586,12 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
         for y0, y1 in bands:
             _sample_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
                          np.int64(y1), spp, seed, max_depth, radiance, depth, normal, albedo, object_id, samples,
-                         rays_per_row)
+                         terms, want_terms, rays_per_row)
             if progress is not None:
                 progress(y1 / height)
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id, "samples": samples}
+    if want_terms:
+        all_aovs.update(term_aovs(terms))
     aovs = {name: all_aovs[name] for name in settings.aov}
     rays = int(rays_per_row.sum()) + (int(corner_rays.sum()) if mode == AA_ADAPTIVE else 0)
     return Film(radiance, aovs, rays, threads, primary_rays=int(samples.sum()))
