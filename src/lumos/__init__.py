@@ -13,7 +13,7 @@ from .errors import LumosError, LumosWarning
 from .scene import Scene, load_scene
 
 __version__ = "0.1.0"
-__all__ = ["Image", "LumosError", "LumosWarning", "Scene", "__version__", "load_scene", "render"]
+__all__ = ["Image", "LumosError", "LumosWarning", "Scene", "__version__", "explain", "load_scene", "render"]
 
 
 def __getattr__(name: str):
@@ -21,4 +21,8 @@ def __getattr__(name: str):
         from .image import Image
 
         return Image
+    if name == "explain":
+        from .explaining import explain
+
+        return explain
     raise AttributeError(f"module 'lumos' has no attribute {name!r}")

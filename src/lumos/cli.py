@@ -4,6 +4,7 @@
     lumos info SCENE
     lumos compare A B [--diff D.png]
     lumos sheet SCENE [-o OUT.png] [--width W] [--height H] [--spp N] [--threads T] [--columns C] [--methods M,...]
+    lumos explain SCENE --pixel X Y [--method M] [--json] [every render flag]
 
 Exit codes: 0 success; 2 bad input or usage (one line `lumos: error: <message>` on stderr); 1 internal error
 (rerun with LUMOS_DEBUG=1 for the traceback); 130 interrupted.
@@ -62,7 +63,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except SystemExit as exc:  # --help, --version, usage errors (argparse prints them)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     try:
-        if args.command in ("render", "sheet"):
+        if args.command in ("render", "sheet", "explain"):
             _skip_numba_blas_probe()
         with warnings.catch_warnings():
             warnings.simplefilter("default", LumosWarning)  # each message once
@@ -111,16 +112,8 @@ def _skip_numba_blas_probe() -> None:
         numba_linalg.ensure_blas = probe  # np.dot in later Numba code still finds SciPy
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="lumos", description="Render scenes with classic rendering methods.")
-    parser.add_argument("--version", action="version", version=f"lumos {__version__}")
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-
-    render = commands.add_parser("render", help="render a scene to an image", description="Render SCENE. "
-                                 "Flags override the scene's render: block.")
-    render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
-    render.add_argument("-o", "--output", metavar="OUT", help="image to write: .png, .exr, .pfm or .npy "
-                        "(default: <scene name>.png in the current folder)")
+def _render_flags(render: argparse.ArgumentParser) -> None:
+    """The flags that override the scene's render: block (lumos render and lumos explain share them)."""
     render.add_argument("--method", metavar="M", help=f"rendering method: {METHOD_HELP}")
     render.add_argument("--shading", metavar="S", help="flat, gouraud or phong (method raster)")
     render.add_argument("--width", type=int, metavar="W", help="image width in pixels")
@@ -154,6 +147,19 @@ def build_parser() -> argparse.ArgumentParser:
                       "independent (uniform random numbers)")
     path.add_argument("--sampling", metavar="S", help="direct light by mis (default: light and BSDF sampling, "
                       "multiple importance sampling), light (light sampling only) or bsdf (BSDF sampling only)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="lumos", description="Render scenes with classic rendering methods.")
+    parser.add_argument("--version", action="version", version=f"lumos {__version__}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    render = commands.add_parser("render", help="render a scene to an image", description="Render SCENE. "
+                                 "Flags override the scene's render: block.")
+    render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    render.add_argument("-o", "--output", metavar="OUT", help="image to write: .png, .exr, .pfm or .npy "
+                        "(default: <scene name>.png in the current folder)")
+    _render_flags(render)
     render.add_argument("--stats", metavar="FILE.json", help="write timings and ray counts as JSON")
     render.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
     rad = render.add_argument_group("radiosity (--method radiosity)")
@@ -193,6 +199,21 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("b", metavar="B", help="reference image")
     compare.add_argument("--diff", metavar="D.png", help="write a heat map of the per-pixel error")
     compare.set_defaults(run=run_compare)
+
+    explain = commands.add_parser("explain", help="say what produced one pixel: its ray tree, polygon, terms",
+                                  description="Explain pixel X Y (column, row from the top left) of SCENE as lumos "
+                                  "render makes it with the same flags: for whitted the ray tree (every ray, what "
+                                  "it hit, the local terms per light with their shadows, the reflected and "
+                                  "transmitted weights, and how they add up to the pixel); for raster the polygon, "
+                                  "its vertices (and their light, Gouraud), the interpolated normal, depth and "
+                                  "coverage; for raycast the hit and its terms.")
+    explain.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    explain.add_argument("--pixel", type=int, nargs=2, metavar=("X", "Y"), required=True,
+                         help="the pixel: column X and row Y, from the top left, from 0")
+    explain.add_argument("--json", action="store_true", help="print one JSON object: value (the pixel's linear "
+                         "RGB) and the tree, instead of the text")
+    _render_flags(explain)
+    explain.set_defaults(run=run_explain)
 
     sheet = commands.add_parser("sheet", help="render a scene with every method, side by side in one image",
                                 description="Render SCENE with each method (and each shading of raster) and "
@@ -363,6 +384,24 @@ def run_compare(args: argparse.Namespace, started: float) -> int:
         print(f"{key:<15} {value:.6g}{unit}")
     if args.diff:
         write_image(args.diff, metrics.diff_image(a, b), srgb=False)
+    return 0
+
+
+def run_explain(args: argparse.Namespace, started: float) -> int:
+    from .explaining import explain, format_text
+    from .scene.loader import load_scene
+
+    scene = load_scene(args.scene)
+    overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
+    overrides.update(_radiosity_overrides(args))
+    if args.checkpoint_every is not None:
+        raise LumosError("--checkpoint-every writes a render's image; lumos explain writes none")
+    x, y = args.pixel
+    tree = explain(scene, x, y, **overrides)
+    if args.json:
+        print(json.dumps(tree))
+    else:
+        print(format_text(tree))
     return 0
 
 

@@ -35,6 +35,7 @@ class CompiledScene:
     emitters: Optional[L.Emitters] = None  # the lights and emissive primitives, for method path
     patches: Optional[object] = None  # radiosity.patches.Patches, for method radiosity
     digest: str = ""  # radiosity: the fingerprint of the geometry and materials a solution depends on
+    material_names: list = field(default_factory=list)  # a name for each material row (messages, explain)
 
 
 class _Materials:
@@ -330,7 +331,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
         bounds = np.array([prim_bounds[:, :3].min(axis=0), prim_bounds[:, 3:].max(axis=0)])
     else:
         bounds = np.zeros((2, 3))
-    return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names)
+    return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names,
+                         material_names=_material_names(scene, materials))
 
 
 def triangle_arrays(tri_verts: np.ndarray, tri_ids: np.ndarray) -> CompiledScene:

@@ -145,6 +145,11 @@ def phong(n, L, V, mat, Id, Is, w):
     return phong_coeffs(n, L, V, kd, ks, mat[MAT_SHININESS], Id, Is, w)
 
 
+#: Columns of `illuminate_terms`' per-light record.
+PL_DIFFUSE, PL_SPECULAR, PL_SHADOW, PL_COS, PL_LIT = 0, 3, 6, 9, 10
+PER_LIGHT_SIZE = 11
+
+
 @njit_inline
 def phong_coeffs(n, L, V, kd, ks, shininess, Id, Is, w):
     """`phong` with the coefficients given as (r, g, b) tuples (a textured surface's, which vary per point)."""
@@ -185,13 +190,13 @@ def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, see
     """The classic model with the coefficients given as (r, g, b) tuples (a textured surface's vary per point):
     the sum of `illuminate_terms`. Returns ((r, g, b), shadow rays traced)."""
     a, d, s, rays = illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample,
-                                     shadows, stack, stack_t, time)
+                                     shadows, stack, stack_t, time, lit.light_vecs, -1)
     return (a[0] + d[0] + s[0], a[1] + d[1] + s[1], a[2] + d[2] + s[2]), rays
 
 
 @njit_inline
 def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack,
-                     stack_t, time):
+                     stack_t, time, per_light, log_base):
     """The classic model's three terms apart: (ambient Ka·Ia, diffuse Σ Kd·Id·(N·L), specular Σ Ks·Is·(R·V)^n,
     shadow rays traced), each term an (r, g, b) tuple, each light's share multiplied by its shadow transmittance.
 
@@ -199,8 +204,16 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
     and n_geo the geometric one, both on the viewer's side. With `shadows`, each light sample is tested by a
     shadow ray that transparent objects attenuate (`shadow_transmittance`); raycast passes False. Random
     numbers for area-light samples come from (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on
-    nothing else.
+    nothing else. With `log_base` >= 0, rows log_base + j of `per_light` (float64 (m, PER_LIGHT_SIZE)) receive
+    light j's share (`lumos.explain`; with −1, any float64 2-D array, never touched): PL_DIFFUSE, PL_SPECULAR (rgb, shadowed), PL_SHADOW (the mean transmittance of its
+    samples, 0 for samples behind the surface), PL_COS (the mean N·L over its samples), PL_LIT (how many of its
+    samples face the surface and are not blocked).
     """
+    log = log_base >= 0
+    if log:  # (element by element: a device function makes no array views, see kernels.jit)
+        for j in range(lit.light_kind.shape[0]):
+            for c in range(PER_LIGHT_SIZE):
+                per_light[log_base + j, c] = 0.0
     amb = lit.ambient
     ambient = (ka[0] * amb[0], ka[1] * amb[1], ka[2] * amb[2])
     dr = dg = db = 0.0
@@ -227,9 +240,19 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
                 (tr, tg, tb), extra = shadow_transmittance(geo, surf, lit, origin, L,
                                                            dist * (1.0 - config.RAY_EPSILON), stack, stack_t, time)
                 rays += extra
-                if tr == 0.0 and tg == 0.0 and tb == 0.0:
-                    continue
+            if log:
+                per_light[log_base + j, PL_SHADOW] += tr * inv_n
+                per_light[log_base + j, PL_SHADOW + 1] += tg * inv_n
+                per_light[log_base + j, PL_SHADOW + 2] += tb * inv_n
+                per_light[log_base + j, PL_COS] += dot(n, L) * inv_n
+            if tr == 0.0 and tg == 0.0 and tb == 0.0:
+                continue
             d, sp = phong_terms(n, L, V, kd, ks, shininess, Id, Is, w * inv_n)
+            if log:
+                for k in range(3):
+                    per_light[log_base + j, PL_DIFFUSE + k] += d[k] * (tr, tg, tb)[k]
+                    per_light[log_base + j, PL_SPECULAR + k] += sp[k] * (tr, tg, tb)[k]
+                per_light[log_base + j, PL_LIT] += 1.0
             dr += d[0] * tr
             dg += d[1] * tg
             db += d[2] * tb

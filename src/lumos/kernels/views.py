@@ -1,6 +1,6 @@
 """Per-stage views of `SceneArrays` (see `layout`): the same arrays, regrouped so each call passes only its own."""
 
-from .jit import njit
+from .jit import njit, njit_alloc
 from .layout import Geometry, Lighting, Surfaces, Textures
 
 
@@ -23,3 +23,16 @@ def lighting_of(sa):
 @njit
 def textures_of(sa):
     return Textures(sa.tex_info, sa.tex_pixels)
+
+
+@njit_alloc
+def owned_views(sa):
+    """(geometry, surfaces, lighting, textures) for a kernel compiled with Numba's runtime that is not a parallel
+    loop (`whitted.explain_pixel`): built here, with the runtime, the views hold counted references. The
+    device-function views above hold none (they are built inside each parallel loop's body), and a serial caller
+    with the runtime would release references it never took."""
+    return (Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info,
+                     sa.unbounded, sa.csg_nodes),
+            Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info),
+            Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars),
+            Textures(sa.tex_info, sa.tex_pixels))

@@ -25,7 +25,7 @@ from .. import config
 from ..errors import LumosError
 from ..compile.camera import camera_arrays
 from ..kernels import raster as R
-from ..kernels.illumination import illuminate_terms
+from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_inline, njit_parallel, prange
 from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_KA,
                               MAT_KD, MAT_KS, MAT_SHININESS, MAT_TEXTURE)
@@ -132,6 +132,7 @@ def _footprint(cam_vecs, ortho, pixel_size, p, fn, frame):
 
 
 _NO_FOOTPRINT = (0.0, 0.0, 0.0, 0.0)
+_NO_PIXEL = np.array([-1, -1], np.int64)
 
 
 @njit_parallel
@@ -163,7 +164,7 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
                 n_f = _facing(n, V)
                 n_s = _facing(n_b, n_f)
                 a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_f, V, ka, kd, ks, mat[MAT_SHININESS],
-                                                   seed, i, 0, shadows, stack, stack_t, 0.0)
+                                                   seed, i, 0, shadows, stack, stack_t, 0.0, out, -1)
                 for k in range(3):
                     out[i, k] = a[k]
                     out[i, 3 + k] = d[k]
@@ -176,7 +177,8 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
                 n_s = (sgn * n_b[0], sgn * n_b[1], sgn * n_b[2])
                 n_g = (sgn * n[0], sgn * n[1], sgn * n[2])
                 _, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, zero, one, one,
-                                                   mat[MAT_SHININESS], seed, i, side, shadows, stack, stack_t, 0.0)
+                                                   mat[MAT_SHININESS], seed, i, side, shadows, stack, stack_t, 0.0,
+                                                   out, -1)
                 for k in range(3):
                     out[i, 6 * side + k] = d[k]
                     out[i, 6 * side + 3 + k] = sp[k]
@@ -187,10 +189,11 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
 @njit_parallel
 def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
            pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
-           object_id, terms, want_terms, rays_per_row):
+           object_id, terms, want_terms, rays_per_row, explain, light_log):
     """One shading pass over the G-buffer: adds weight × each pixel's radiance to `accum` (float32) and, with
     `want_terms`, weight × its ambient, diffuse, specular and emitted terms to terms[..., 0:12]; with `aovs` set
-    (the first pass, when any is asked for) it also fills the AOV buffers. `uv_at` is the G-buffer channel of
+    (the first pass, when any is asked for) it also fills the AOV buffers. At pixel `explain` (x, y; (−1, −1)
+    for none) Phong shading records each light's share in `light_log` (`lumos.explain`). `uv_at` is the G-buffer channel of
     (u, v) (−1: the scene has no textures), `light_at` that of Gouraud's interpolated light."""
     height, width = ids.shape
     for y in prange(height):
@@ -251,7 +254,8 @@ def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, f
                 else:
                     a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_sh, _facing(fn, V), V, ka, kd, ks,
                                                        mat[MAT_SHININESS], seed, y * width + x, sample, shadows,
-                                                       stack, stack_t, 0.0)
+                                                       stack, stack_t, 0.0, light_log,
+                                                       0 if x == explain[0] and y == explain[1] else -1)
                     rays += extra
             # emitted light: one-sided for rect and disk area lights (their winding faces the lit side)
             e = (0.0, 0.0, 0.0)
@@ -334,6 +338,74 @@ class Rasterizer:
                        float(jx), float(jy), row_lo, row_hi, np.int64(mode), zbuf, ids, gbuf, count)
 
 
+class RasterFrame:
+    """Everything one raster image needs before its passes: the vertex stage done (Gouraud's light at the
+    vertices, flat's terms per polygon), the rasterizer set up; `shade_pass` runs one scan-conversion and
+    shading pass. `render_raster` runs them all; `lumos.explain` runs them one by one at one pixel."""
+
+    def __init__(self, compiled, camera, settings):
+        width, height = settings.width, settings.height
+        self.settings = settings
+        self.mesh = mesh = compiled.raster
+        self.sa = sa = compiled.arrays
+        self.shading = _SHADING[settings.shading]
+        self.shadows = bool(settings.shadows)
+        self.cam_vecs, cam_params = camera_arrays(camera)
+        self.ortho = camera.type == "orthographic"
+        half = cam_params[CAM_HALF_SIZE] if self.ortho else cam_params[CAM_TAN_HALF_FOV]
+        self.pixel_size = 2.0 * half / height  # one pixel's step in the image plane at unit depth (or world units)
+        self.seed = np.int64(settings.seed)
+        self.rays = 0
+        # vertex stage: the attributes the rasterizer interpolates (and, for Gouraud, the light at each vertex)
+        nv = len(mesh.positions)
+        textured = sa.tex_info.shape[0] > 0
+        self.frames = mesh.uv_frames() if textured else np.zeros((mesh.n_prims, 12))
+        self.uv_at = G_UV if textured else -1
+        self.light_at = G_UV + 2 if textured else G_UV
+        k = self.light_at + (12 if self.shading == GOURAUD else 0)
+        attrs = np.empty((nv, k))
+        attrs[:, G_POS:G_POS + 3] = mesh.positions
+        attrs[:, G_NORMAL:G_NORMAL + 3] = mesh.normals
+        if textured:
+            attrs[:, G_UV:G_UV + 2] = mesh.uvs
+        self.prim_terms = np.zeros((1, 12))
+        if self.shading == GOURAUD and nv:
+            vert_material = np.zeros(nv, np.int32)
+            vert_material[mesh.prim_index] = np.repeat(mesh.prim_info[:, 0], np.diff(mesh.prim_start))
+            light = np.zeros((nv, 12))
+            counts = np.zeros(-(-nv // _CHUNK), np.int64)
+            _light_points(sa, mesh.positions, mesh.normals, mesh.uvs, _vertex_frames(mesh, self.frames),
+                          vert_material, self.cam_vecs, self.ortho, self.seed, self.shadows, True, light, counts)
+            attrs[:, self.light_at:self.light_at + 12] = light
+            self.rays += int(counts.sum())
+        if self.shading == FLAT and mesh.n_prims:
+            self.prim_terms = np.zeros((mesh.n_prims, 12))
+            counts = np.zeros(-(-mesh.n_prims // _CHUNK), np.int64)
+            _light_points(sa, mesh.prim_point, mesh.prim_normal, mesh.prim_uv, self.frames,
+                          np.ascontiguousarray(mesh.prim_info[:, 0]), self.cam_vecs, self.ortho, self.seed,
+                          self.shadows, False, self.prim_terms, counts)
+            self.rays += int(counts.sum())
+        self.attrs = attrs
+        self.raster = Rasterizer(mesh, attrs, camera, width, height, settings.cull_backfaces,
+                                 settings.perspective_correct)
+        self.offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
+
+    def shade_pass(self, s, weight, radiance, aov_buffers, terms, want_terms, rays_per_row, explain=_NO_PIXEL,
+                   light_log=None):
+        """Pass s (at its sample offset): scan-convert, then add weight × the shaded pixels to `radiance` (and
+        the terms); fills the AOV buffers when `aov_buffers` is given. Returns (zbuf, ids, gbuf) of the pass."""
+        jx, jy = self.offsets[s]
+        zbuf, ids, gbuf = self.raster.draw(jx, jy)
+        want_aovs = aov_buffers is not None
+        depth, normal, albedo, object_id = aov_buffers if want_aovs else allocate_aovs(1, 1)
+        _shade(self.sa, ids, gbuf, np.int64(self.uv_at), np.int64(self.light_at), self.mesh.prim_info,
+               self.mesh.prim_normal, self.prim_terms, self.frames, self.cam_vecs, self.ortho, self.pixel_size,
+               np.int64(self.shading), bool(self.settings.mipmap), self.seed, np.int64(s), self.shadows, weight,
+               radiance, want_aovs, depth, normal, albedo, object_id, terms, want_terms, rays_per_row, explain,
+               light_log if light_log is not None else np.zeros((0, PER_LIGHT_SIZE)))
+        return zbuf, ids, gbuf
+
+
 def render_raster(compiled, camera, settings, progress=None) -> Film:
     """Scan-line render `compiled` (a `CompiledScene` compiled for method raster) with `settings`."""
     width, height = settings.width, settings.height
@@ -342,69 +414,25 @@ def render_raster(compiled, camera, settings, progress=None) -> Film:
                          "supersample (spp passes)")
     check_memory(width, height, bytes_per_pixel=96)
     threads = set_threads(settings.threads)
-    mesh = compiled.raster
-    sa = compiled.arrays
-    shading = _SHADING[settings.shading]
-    shadows = bool(settings.shadows)
-    cam_vecs, cam_params = camera_arrays(camera)
-    ortho = camera.type == "orthographic"
-    half = cam_params[CAM_HALF_SIZE] if ortho else cam_params[CAM_TAN_HALF_FOV]
-    pixel_size = 2.0 * half / height  # one pixel's step in the image plane at unit depth (or in world units)
-    seed = np.int64(settings.seed)
-    rays = 0
-
-    # vertex stage: the attributes the rasterizer interpolates (and, for Gouraud, the light at each vertex)
-    nv = len(mesh.positions)
-    textured = sa.tex_info.shape[0] > 0
-    frames = mesh.uv_frames() if textured else np.zeros((mesh.n_prims, 12))
-    uv_at = G_UV if textured else -1
-    light_at = G_UV + 2 if textured else G_UV
-    k = light_at + (12 if shading == GOURAUD else 0)
-    attrs = np.empty((nv, k))
-    attrs[:, G_POS:G_POS + 3] = mesh.positions
-    attrs[:, G_NORMAL:G_NORMAL + 3] = mesh.normals
-    if textured:
-        attrs[:, G_UV:G_UV + 2] = mesh.uvs
-    prim_terms = np.zeros((1, 12))
-    if shading == GOURAUD and nv:
-        vert_material = np.zeros(nv, np.int32)
-        vert_material[mesh.prim_index] = np.repeat(mesh.prim_info[:, 0], np.diff(mesh.prim_start))
-        light = np.zeros((nv, 12))
-        counts = np.zeros(-(-nv // _CHUNK), np.int64)
-        _light_points(sa, mesh.positions, mesh.normals, mesh.uvs, _vertex_frames(mesh, frames), vert_material,
-                      cam_vecs, ortho, seed, shadows, True, light, counts)
-        attrs[:, light_at:light_at + 12] = light
-        rays += int(counts.sum())
-    if shading == FLAT and mesh.n_prims:
-        prim_terms = np.zeros((mesh.n_prims, 12))
-        counts = np.zeros(-(-mesh.n_prims // _CHUNK), np.int64)
-        _light_points(sa, mesh.prim_point, mesh.prim_normal, mesh.prim_uv, frames,
-                      np.ascontiguousarray(mesh.prim_info[:, 0]), cam_vecs, ortho, seed, shadows, False, prim_terms,
-                      counts)
-        rays += int(counts.sum())
-
-    raster = Rasterizer(mesh, attrs, camera, width, height, settings.cull_backfaces, settings.perspective_correct)
+    frame = RasterFrame(compiled, camera, settings)
     radiance = np.zeros((height, width, 3), np.float32)
     want_aovs = bool(settings.aov)
     want_terms = any(name in TERM_AOVS for name in settings.aov)
-    depth, normal, albedo, object_id = allocate_aovs(height, width) if want_aovs else allocate_aovs(1, 1)
+    buffers = allocate_aovs(height, width) if want_aovs else None
     terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
     rays_per_row = np.zeros(height, np.int64)
-    offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
-    for s, (jx, jy) in enumerate(offsets):
-        zbuf, ids, gbuf = raster.draw(jx, jy)
-        _shade(sa, ids, gbuf, np.int64(uv_at), np.int64(light_at), mesh.prim_info, mesh.prim_normal, prim_terms,
-               frames, cam_vecs, ortho, pixel_size, np.int64(shading), bool(settings.mipmap), seed, np.int64(s),
-               shadows, 1.0 / len(offsets), radiance, want_aovs and s == 0, depth, normal, albedo, object_id,
-               terms, want_terms, rays_per_row)
+    n = len(frame.offsets)
+    for s in range(n):
+        frame.shade_pass(s, 1.0 / n, radiance, buffers if s == 0 else None, terms, want_terms, rays_per_row)
         if progress is not None:
-            progress((s + 1) / len(offsets))
+            progress((s + 1) / n)
+    depth, normal, albedo, object_id = buffers if want_aovs else allocate_aovs(1, 1)
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
-                "samples": np.full((height, width), len(offsets), np.int32)}
+                "samples": np.full((height, width), n, np.int32)}
     if want_terms:
         all_aovs.update(term_aovs(terms))
     aovs = {name: all_aovs[name] for name in settings.aov}
-    return Film(radiance, aovs, rays + int(rays_per_row.sum()), threads)
+    return Film(radiance, aovs, frame.rays + int(rays_per_row.sum()), threads)
 
 
 def _vertex_frames(mesh, frames):

@@ -13,7 +13,7 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray
-from ..kernels.illumination import illuminate_terms
+from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_parallel, prange
 from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
@@ -26,9 +26,9 @@ from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory,
 
 
 @njit
-def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stack, stack_t):
+def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stack, stack_t, per_light, log_base):
     """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays,
-    (ambient, diffuse, specular, emitted))."""
+    (ambient, diffuse, specular, emitted)); each light's share goes to `per_light` from row `log_base` (>= 0; `illuminate_terms`)."""
     t, ref, b1, b2, part = hit
     p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
     mat = lit.materials[mat_id]
@@ -45,7 +45,8 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
     n_sh = shading_side(n_sh, n_geo, V)
     n_g = n_geo if dot(n_geo, V) >= 0.0 else mul(n_geo, -1.0)
     a, dif, spec, rays = illuminate_terms(lit, geo, surf, p, n_sh, n_g, V, ka, kd, ks, mat[MAT_SHININESS], seed,
-                                          pixel, sample, shadows, stack, stack_t, 0.0)
+                                          pixel, sample, shadows, stack, stack_t, 0.0, per_light,
+                                          log_base)
     e = (emit * mat[MAT_EMISSION], emit * mat[MAT_EMISSION + 1], emit * mat[MAT_EMISSION + 2])
     rgb = (a[0] + dif[0] + spec[0] + e[0], a[1] + dif[1] + spec[1] + e[1], a[2] + dif[2] + spec[2] + e[2])
     return rgb, n_sh, kd, object_id, rays, (a, dif, spec, e)
@@ -53,9 +54,10 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
 
 @njit_parallel
 def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
-                  radiance, depth, normal, albedo, object_id, terms, want_terms, rays_per_row):
+                  radiance, depth, normal, albedo, object_id, terms, want_terms, rays_per_row, explain, light_log):
     """One band of rows: `spp` camera rays per pixel, box-filtered; with `want_terms`, the mean of the samples'
-    terms (ambient, diffuse, specular, emitted; reflected and transmitted stay 0) in terms[y, x, :18]."""
+    terms (ambient, diffuse, specular, emitted; reflected and transmitted stay 0) in terms[y, x, :18]. At pixel
+    `explain` (x, y), the first sample's per-light shares go to `light_log` (`lumos.explain`)."""
     for y in prange(y0, y1):
         # per row: parfor bodies cannot capture a namedtuple built outside them
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
@@ -79,8 +81,9 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                         for k in range(3):
                             terms[y, x, 9 + k] += inv * sa.background[k]
                     continue
+                logged = x == explain[0] and y == explain[1] and s == 0
                 rgb, n_sh, kd, obj, extra, parts = shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, s, False,
-                                                             stack, stack_t)
+                                                             stack, stack_t, light_log, 0 if logged else -1)
                 rays += extra
                 if want_terms:
                     for j in range(4):
@@ -100,10 +103,14 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
         rays_per_row[y] = rays
 
 
-def render_raycast(compiled, camera, settings, progress=None) -> Film:
+_NO_PIXEL = np.array([-1, -1], np.int64)
+
+
+def render_raycast(compiled, camera, settings, progress=None, explain=None) -> Film:
     """Ray-cast `compiled` (a `CompiledScene`) through `camera` with `settings` (a `RenderSettings`).
 
-    `progress(fraction)` is called after each band of rows. Returns a `Film`.
+    `progress(fraction)` is called after each band of rows. Returns a `Film`. `explain` = (x, y, light_log):
+    only row y is rendered, and pixel (x, y)'s per-light shares go to light_log (`lumos.explain`).
     """
     width, height = settings.width, settings.height
     if settings.antialias == "adaptive":
@@ -118,9 +125,12 @@ def render_raycast(compiled, camera, settings, progress=None) -> Film:
     want_terms = any(name in TERM_AOVS for name in settings.aov)
     terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
     rays_per_row = np.zeros(height, np.int64)
-    for y0, y1 in row_bands(height):
+    pixel, light_log, bands = _NO_PIXEL, np.zeros((0, PER_LIGHT_SIZE)), row_bands(height)
+    if explain is not None:
+        pixel, light_log, bands = np.array(explain[:2], np.int64), explain[2], [(explain[1], explain[1] + 1)]
+    for y0, y1 in bands:
         _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, y0, y1, spp, settings.seed,
-                      radiance, depth, normal, albedo, object_id, terms, want_terms, rays_per_row)
+                      radiance, depth, normal, albedo, object_id, terms, want_terms, rays_per_row, pixel, light_log)
         if progress is not None:
             progress(y1 / height)
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,

@@ -30,7 +30,7 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray, camera_ray_at
-from ..kernels.illumination import illuminate_terms, is_solid
+from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from ..kernels.layout import (
     LIGHT_SPHERE,
@@ -46,7 +46,7 @@ from ..kernels.rng import rand01
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.traverse import closest_hit
 from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
-from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
+from ..kernels.views import geometry_of, lighting_of, owned_views, surfaces_of, textures_of
 from ..errors import LumosError
 from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
 
@@ -64,8 +64,8 @@ _ANTIALIAS = {"none": AA_NONE, "supersample": AA_SUPERSAMPLE, "adaptive": AA_ADA
 LOG_PARENT, LOG_KIND, LOG_DEPTH, LOG_ORIGIN, LOG_DIR, LOG_WEIGHT, LOG_T, LOG_OBJECT, LOG_MATERIAL = 0, 1, 2, 3, 6, 9, 12, 13, 14
 LOG_POINT, LOG_NORMAL, LOG_NGEO, LOG_AMBIENT, LOG_DIFFUSE, LOG_SPECULAR, LOG_EMITTED = 15, 18, 21, 24, 27, 30, 33
 LOG_WR, LOG_WT, LOG_ENTERING, LOG_ETA, LOG_FRESNEL, LOG_TIR, LOG_BACKGROUND, LOG_UV = 36, 39, 42, 43, 44, 45, 46, 49
-LOG_KA, LOG_KD, LOG_KS, LOG_TIME = 51, 54, 57, 60
-LOG_COLS = 61
+LOG_KA, LOG_KD, LOG_KS, LOG_TIME, LOG_FX, LOG_FY = 51, 54, 57, 60, 61, 62
+LOG_COLS = 63
 #: Ray kinds in the log (LOG_KIND), and the branch of the tree a ray is in (the term its light counts for).
 RAY_CAMERA, RAY_REFLECTED, RAY_TRANSMITTED = 0, 1, 2
 #: Term channels (as `common.TERM_CHANNELS`): ambient, diffuse, specular, emitted, reflected, transmitted.
@@ -73,16 +73,18 @@ T_AMBIENT, T_DIFFUSE, T_SPECULAR, T_EMITTED, T_REFLECTED, T_TRANSMITTED = 0, 3, 
 
 
 @njit_alloc
-def _scratch(max_depth, log_rows=0):
+def _scratch(max_depth, log_rows=0, n_lights=0):
     """Per-thread work arrays for `trace`: the ray stack (origin, direction, weight; depth, media count, branch,
     log row of the ray that spawned it; media objects and indices of refraction), the BVH traversal stack,
     the sample's terms (18: see T_*), and the ray-tree log (`log_rows` rows, none by default; its count is −1
-    when logging is off)."""
+    when logging is off) with each logged hit's per-light shares (`illuminate_terms`' per_light, for
+    `n_lights` lights)."""
     size = 2 * max_depth + 4  # depth-first: at most one pending sibling per level, plus the ray in hand
     log_n = np.full(1, -1 if log_rows == 0 else 0, np.int64)
     return (np.empty((size, 9)), np.empty((size, 4), np.int64), np.empty((size, MAX_MEDIA), np.int64),
             np.empty((size, MAX_MEDIA)), np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK),
-            np.zeros(18), np.zeros((max(log_rows, 1), LOG_COLS)), log_n)
+            np.zeros(18), np.zeros((max(log_rows, 1), LOG_COLS)), log_n,
+            np.zeros((max(log_rows, 1) * max(n_lights, 1), PER_LIGHT_SIZE)), np.int64(max(n_lights, 1)))
 
 
 @njit
@@ -136,9 +138,10 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
     sample's terms are left in scratch[6] (T_*: the primary hit's ambient, diffuse, specular and emitted light
     (or the background it misses into), and the light of its reflected and transmitted rays); with logging on,
     one row per ray in scratch[7] (LOG_*)."""
-    st_f, st_i, st_mo, st_mi, stack, stack_t, tacc, log, log_n = scratch
+    st_f, st_i, st_mo, st_mi, stack, stack_t, tacc, log, log_n, light_log, light_stride = scratch
     logging = log_n[0] >= 0
-    tacc[:] = 0.0
+    for k in range(18):  # element by element: device code makes no array views (kernels.jit)
+        tacc[k] = 0.0
     r = g = b = 0.0
     rays = 0
     aov_t = -1.0
@@ -167,7 +170,8 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         if logging and log_n[0] < log.shape[0]:
             row = log_n[0]
             log_n[0] += 1
-            log[row, :] = 0.0
+            for k in range(LOG_COLS):
+                log[row, k] = 0.0
             code = st_i[top, 3]
             log[row, LOG_PARENT] = -1 if depth == 0 else (code if code >= 0 else ~code)
             log[row, LOG_KIND] = RAY_CAMERA if depth == 0 else (RAY_REFLECTED if code >= 0 else RAY_TRANSMITTED)
@@ -212,7 +216,8 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         if depth == 0:
             aov_t, aov_n, aov_kd, aov_obj = t, n_s, kd, obj
         la, ld, ls, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, mat[MAT_SHININESS],
-                                             seed, pixel, sample, True, stack, stack_t, time)
+                                             seed, pixel, sample, True, stack, stack_t, time,
+                                             light_log, row * light_stride if row >= 0 else -1)
         rays += extra
         r += w0 * (e[0] + la[0] + ld[0] + ls[0])
         g += w1 * (e[1] + la[1] + ld[1] + ls[1])
@@ -242,6 +247,8 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
             log[row, LOG_UV] = u
             log[row, LOG_UV + 1] = v
             log[row, LOG_ENTERING] = 1.0 if entering else 0.0
+            _log3(log, row, LOG_WR, kr)  # the material's; Fresnel and total internal reflection adjust them below
+            _log3(log, row, LOG_WT, kt)
         if depth >= max_depth:
             continue
         # the weights of the two secondary rays
@@ -359,7 +366,8 @@ def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, hei
     r = g = b = 0.0
     rays = 0
     if want_terms:
-        tsum[:] = 0.0
+        for k in range(18):
+            tsum[k] = 0.0
     for s in range(spp):
         o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
         time = _time_of(cam_time, seed, pixel, s)
@@ -387,7 +395,12 @@ def _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, f
     lx, ly = rand01(seed, key, sample, 2), rand01(seed, key, sample, 3)
     o, d = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
     time = _time_of(cam_time, seed, key, sample)
+    log, log_n = scratch[7], scratch[8]
+    first = log_n[0]
     rgb, n, info = trace(geo, surf, lit, tex, o, d, time, max_depth, seed, key, sample, scratch, background)
+    if 0 <= first < log.shape[0]:  # where the camera ray went through the image (lumos.explain)
+        log[first, LOG_FX] = fx
+        log[first, LOG_FY] = fy
     return rgb, n
 
 
@@ -468,7 +481,8 @@ def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, h
     rays = 0
     stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3] = 0, 0, cells, 0
     sp = 1
-    value[:] = 0.0
+    for ch in range(channels):
+        value[ch] = 0.0
     while sp > 0:
         sp -= 1
         ix, iy, size, level = stack[sp, 0], stack[sp, 1], stack[sp, 2], stack[sp, 3]
@@ -538,6 +552,59 @@ def _aov_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, m
             rays += n
             _store_aovs(x, y, info, depth, normal, albedo, object_id)
         rays_per_row[y] += rays
+
+
+@njit_alloc
+def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode, spp, seed, max_depth, threshold,
+                  max_level, log_rows):
+    """Pixel (x, y) exactly as `render_whitted` makes it, with every ray logged (`lumos.explain`).
+
+    Returns (value (3,), log (rows, LOG_COLS), per-light log (rows · n_lights, PER_LIGHT_SIZE): row r's lights
+    from r · n_lights, rows used, weight of each row's camera ray in the pixel (rows,), 0 for the rays it
+    spawned)."""
+    geo, surf, lit, tex = owned_views(sa)
+    scratch = _scratch(max_depth, log_rows, lit.light_kind.shape[0])
+    log, log_n = scratch[7], scratch[8]
+    weight = np.zeros(log_rows)
+    value = np.zeros(3)
+    if mode != AA_ADAPTIVE:
+        depth, normal, albedo = np.zeros((height, width)), np.zeros((height, width, 3)), np.zeros((height, width, 3))
+        object_id = np.zeros((height, width), np.int32)
+        rgb, _ = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
+                              max_depth, scratch, sa.background, depth, normal, albedo, object_id, np.zeros(18),
+                              False)
+        value[0], value[1], value[2] = rgb
+        for row in range(log_n[0]):
+            if log[row, LOG_DEPTH] == 0.0:
+                weight[row] = 1.0 / spp
+        return value, log, scratch[9], log_n[0], weight
+    cells = np.int64(1) << max_level
+    n = cells + 1
+    corners = np.zeros((height + 1, width + 1, 3))
+    grid_row = np.full((n, n), -1, np.int64)  # the log row of each point's camera ray
+    for cy in range(y, y + 2):
+        for cx in range(x, x + 2):
+            grid_row[(cy - y) * cells, (cx - x) * cells] = log_n[0]
+            rgb, _ = _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, np.float64(cx),
+                            np.float64(cy), seed, cy * (width + 1) + cx, 0, max_depth, scratch, sa.background)
+            corners[cy, cx, 0], corners[cy, cx, 1], corners[cy, cx, 2] = rgb
+    start = log_n[0]
+    grid = np.empty((n, n, 3))
+    stamp = np.full((n, n), -1, np.int64)
+    stack = np.empty((4 * max_level + 4, 4), np.int64)
+    weights = np.zeros((n, n))
+    adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth,
+                   threshold, max_level, corners, scratch, sa.background, grid, stamp, stack, weights, value)
+    for row in range(start, log_n[0]):
+        if log[row, LOG_DEPTH] == 0.0:
+            gx = np.int64(np.round((log[row, LOG_FX] - x) * cells))
+            gy = np.int64(np.round((log[row, LOG_FY] - y) * cells))
+            grid_row[gy, gx] = row
+    for gy in range(n):
+        for gx in range(n):
+            if grid_row[gy, gx] >= 0:
+                weight[grid_row[gy, gx]] = weights[gy, gx]
+    return value, log, scratch[9], log_n[0], weight
 
 
 def render_whitted(compiled, camera, settings, progress=None) -> Film:
