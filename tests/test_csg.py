@@ -399,12 +399,6 @@ def test_die_render_matches_naive():
     assert pip_dark.sum() > 20 and want.std() > 0.1
 
 
-def test_raster_rejects_csg_in_one_line():
-    with pytest.raises(lumos.LumosError) as err:
-        lumos.render(die_scene(), method="raster", width=32, height=24)
-    assert "csg" in str(err.value) and "\n" not in str(err.value)
-
-
 def test_open_mesh_in_csg_is_an_error():
     s = icosphere([0, 0, 0], 1.0, 1)
     s["faces"] = s["faces"][1:]

@@ -247,11 +247,36 @@ def test_full_matrix_solvers_refuse_what_does_not_fit(monkeypatch):
         solve(CORNELL, settings(solver="gauss_seidel", patch_size=0.5))
 
 
-def test_csg_is_refused_with_a_clear_error():
-    scene = {"objects": [{"type": "csg", "op": "union", "left": {"type": "sphere"},
-                          "right": {"type": "box"}}], "lights": [{"type": "point", "position": [0, 3, 3]}]}
-    with pytest.raises(LumosError, match="csg"):
-        lumos.render(scene, method="radiosity", width=8, height=8)
+def test_csg_is_meshed_as_the_raster_draws_it_each_solid_with_its_material():
+    """A box with a bite out of it (`compile.csg_mesh`'s boolean mesh): the patches cover its surface once, the
+    bite's with the sphere's kd; a glass solid also gets its inside; the solution draws."""
+    from lumos.api import resolve_settings
+    from lumos.compile import compile_scene
+    from lumos.scene.loader import load_scene
+
+    def bitten_box(body):
+        return {"lights": [{"type": "point", "position": [2, 4, 3], "intensity": 1.0}],
+                "camera": {"position": [2.5, 3.0, 4.0], "look_at": [0, 0, 0]},
+                "objects": [{"type": "csg", "op": "difference", "material": body,
+                             "left": {"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1]},
+                             "right": {"type": "sphere", "center": [0, 1, 0], "radius": 0.5,
+                                       "material": {"kd": [0.7, 0.1, 0.1]}}}]}
+
+    scene = load_scene(bitten_box({"kd": 0.5}))
+    st = resolve_settings(scene, {"method": "radiosity", "radiosity": {"patch_size": 0.25}})
+    p = compile_scene(scene, st).patches
+    assert np.all(p.patch_side == 1)  # opaque, seen from outside: no inside patches
+    bite = p.reflectance[:, 0] > p.reflectance[:, 1] + 0.5  # red
+    assert np.all(np.isclose(p.reflectance[~bite], 0.5))
+    # the box's faces less the hole, and the lower half of the (tessellated) sphere
+    assert p.area[~bite].sum() == pytest.approx(24.0 - math.pi * 0.25, rel=5e-3)
+    assert p.area[bite].sum() == pytest.approx(2 * math.pi * 0.25, rel=5e-3)
+    glass = load_scene(bitten_box({"kd": 0.1, "kt": 0.8, "ior": 1.5}))
+    q = compile_scene(glass, st).patches
+    glass_body = q.reflectance[:, 0] < q.reflectance[:, 1] + 0.5
+    assert np.all(q.patch_side[~glass_body] == 1) and np.sum(q.patch_side == -1) == np.sum(glass_body) // 2
+    img = lumos.render(scene, method="radiosity", width=32, height=24, radiosity={"patch_size": 0.25})
+    assert np.isfinite(img.array).all() and img.array.max() > 0.05
 
 
 # ------------------------------------------------------------------------------------- against the path tracer

@@ -313,7 +313,7 @@ def test_raycast_cell_is_the_single_render_png(capsys, tiny, tmp_path):
 
 @pytest.fixture
 def broken(monkeypatch, fakes):
-    """Beside the fakes, a method that cannot draw any scene (as raster cannot draw csg)."""
+    """Beside the fakes, a method that refuses every scene, as a real one refuses what it cannot draw."""
 
     def render_broken(compiled, camera, settings, progress=None):
         raise LumosError("objects[0]: csg objects cannot be drawn by broken")

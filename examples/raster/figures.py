@@ -152,10 +152,24 @@ def crease_figure():
     mesh_key_figure("crease.yaml", "crease_angle", (180, 60), "crease.png", 1, 480, 300)
 
 
+def csg_figure():
+    """2 x 2: the ivory die of the Whitted dice (csg: a rounded cube minus 21 spheres) under raster Phong, raycast
+    (the exact solid), raster flat and raster Gouraud (the booleans' mesh at the default tessellation)."""
+    scene = lumos.load_scene(HERE.parent / "whitted" / "dice.yaml")
+    panels = []
+    for caption, settings in (("raster, Phong", dict(method="raster", shading="phong")),
+                              ("raycast (exact)", dict(method="raycast")),
+                              ("raster, flat", dict(method="raster", shading="flat")),
+                              ("raster, Gouraud", dict(method="raster", shading="gouraud"))):
+        pixels = shot(scene, width=960, height=720, antialias="none", **settings)
+        panels.append((caption, pixels[150:540, 105:465]))  # the ivory die
+    compose(panels, 2).save(OUT / "csg.png")
+
+
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     for make in (shading_figure, sheet_figure, t_junctions_figure, subdivision_figure, orientation_figure,
-                 perspective_figure, crease_figure):
+                 perspective_figure, crease_figure, csg_figure):
         make()
 
 

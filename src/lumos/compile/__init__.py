@@ -250,7 +250,7 @@ def _compile_raster(scene, settings) -> CompiledScene:
     object_materials = [materials.add(scene.material_of(obj)) for obj in scene.objects]
     emitters = []
     lights = _lights(scene, materials, emitters)
-    mesh = build_raster_mesh(scene, settings.tessellation, object_materials, emitters)
+    mesh = build_raster_mesh(scene, settings.tessellation, object_materials, emitters, material_row=materials.add)
     tri_parts = []
     if settings.shadows:  # shadow rays test the polygons the camera sees (area lights cast no shadows)
         faces, prim = mesh.triangles()

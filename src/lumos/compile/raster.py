@@ -3,7 +3,9 @@
 Every object becomes polygons in world space with a shading normal at each vertex: meshes as given (after the
 fix-ups they ask for: T-junction repair, triangulation, subdivision, vertex normals averaged from the faces
 that share a vertex), analytic shapes tessellated at `render.tessellation` segments with their exact normals,
-planes as a large patch around the camera, and area lights as emitting polygons the camera can see.
+csg objects as their solids' tessellations combined by mesh booleans (`compile.csg_mesh`), planes as a large
+patch around the camera, and area lights as emitting polygons the camera can see. Objects are drawn where they
+are at time 0: `motion` is not read (no motion blur).
 """
 
 from __future__ import annotations
@@ -13,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import mesh as meshops
-from ..errors import LumosError
 from ..kernels import layout as L
+from .csg_mesh import csg_pieces
 from .meshprep import facet, prepare_mesh
 from .shapes import canonical
 from .tessellate import tessellate_plane, tessellate_shape
@@ -125,9 +127,10 @@ def _plane_part(world_from_canonical, center, extent, segments, material, object
     return _Part(verts, t.normals, local[:, :2].copy(), t.faces, t.groups, material, object_id)
 
 
-def build_raster_mesh(scene, segments: int, object_materials: list, emitters: list) -> RasterMesh:
+def build_raster_mesh(scene, segments: int, object_materials: list, emitters: list, *, material_row) -> RasterMesh:
     """The polygons of `scene`. `object_materials[i]` is object i's material row; `emitters` lists the area
-    lights' (shape kind, world_from_canonical, material row, light index)."""
+    lights' (shape kind, world_from_canonical, material row, light index); `material_row(material)` gives the
+    row of a scene Material (for the solids of csg objects that have their own)."""
     cam = np.asarray(scene.camera.position, dtype=np.float64)
     parts = []
     analytic_points = [cam]
@@ -139,16 +142,18 @@ def build_raster_mesh(scene, segments: int, object_materials: list, emitters: li
             w = obj.transform.to_matrix() @ m if obj.transform is not None else m
             analytic_points.append(w[:3, 3])
     for object_id, obj in enumerate(scene.objects):
-        if obj.type == "csg":
-            raise LumosError(f"objects[{object_id}]: csg objects cannot be drawn by raster (scan conversion needs "
-                             "polygons); render them with raycast or whitted")
         mat = object_materials[object_id]
         world_from_object = None if obj.transform is None else obj.transform.to_matrix()
-        if obj.type in ("triangle", "mesh"):
-            part = _mesh_part(obj, world_from_object, mat, object_id)
-            parts.append(part)
-            analytic_points.append(part.verts.min(axis=0))
-            analytic_points.append(part.verts.max(axis=0))
+        if obj.type in ("triangle", "mesh", "csg"):
+            if obj.type == "csg":
+                new = [_Part(p.vertices, p.normals, p.uvs, p.faces, p.groups, material_row(p.material), object_id)
+                       for p in csg_pieces(scene, obj, world_from_object, segments, f"objects[{object_id}]")]
+            else:
+                new = [_mesh_part(obj, world_from_object, mat, object_id)]
+            for part in new:
+                parts.append(part)
+                analytic_points.append(part.verts.min(axis=0))
+                analytic_points.append(part.verts.max(axis=0))
             continue
         kind, m = canonical(obj)
         w = m if world_from_object is None else world_from_object @ m

@@ -9,6 +9,8 @@
   finite patches;
 - spheres, cylinders, cones and disks: the scan-line renderer's tessellation (`compile.tessellate`) at
   `segments`, then cut like meshes;
+- csg objects: the scan-line renderer's boolean mesh (`compile.csg_mesh`: the solids tessellated at `segments`
+  and combined by mesh booleans), each solid's faces with its own material, cut like meshes;
 - area lights: their emitting shapes, tessellated the same way, emitting their radiance on the lit side.
 
 **Sides.** Light may reach either side of an open surface (a wall, a disk, a triangle, a mesh), so each side of
@@ -256,6 +258,7 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     the compile step's (`CompiledScene.bounds`), to which planes are clipped."""
     import warnings
 
+    from ..compile.csg_mesh import csg_pieces
     from ..compile.meshprep import prepare_mesh
     from ..compile.shapes import canonical, frame
     from ..compile.tessellate import tessellate_shape
@@ -273,8 +276,7 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     mat_index: dict[int, int] = {}
     textured = set()
 
-    def material_row(obj) -> tuple[int, np.ndarray, np.ndarray]:
-        mat = scene.material_of(obj)
+    def material_row(mat) -> tuple[int, np.ndarray, np.ndarray]:
         key = id(mat)
         if key not in mat_index:
             mat_index[key] = len(mat_index)
@@ -288,16 +290,33 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
             kd = kd / total.max()
         return mat_index[key], kd, np.asarray(mat.emission, np.float64)
 
+    def optics(material) -> np.ndarray:
+        return np.array([*material.kr, *material.kt, material.ior, 1.0 if material.fresnel else 0.0])
+
+    n_groups = len(scene.objects) + len(scene.lights)  # smoothing groups: objects, area lights, then csg solids
     for object_id, obj in enumerate(scene.objects):
-        if obj.type == "csg":
-            raise LumosError(f"objects[{object_id}]: radiosity cannot mesh csg objects into patches yet; render "
-                             "them with path, whitted or raycast")
-        mat, rho, le = material_row(obj)
         material = scene.material_of(obj)
-        b.optics = np.array([*material.kr, *material.kt, material.ior, 1.0 if material.fresnel else 0.0])
+        mat, rho, le = material_row(material)
+        b.optics = optics(material)
         clear = any(c > 0 for c in material.kt)  # a transparent solid: rays inside it meet its inside
         group = object_id
         world = None if obj.transform is None else obj.transform.to_matrix()
+        if obj.type == "csg":  # the scan-line renderer's boolean mesh: closed, one piece per solid that shows
+            pieces = csg_pieces(scene, obj, world, segments, f"objects[{object_id}]")
+            if not pieces:
+                continue
+            offsets = np.cumsum([0] + [len(p.vertices) for p in pieces])
+            seen_inside = _points_inside_mesh(np.concatenate([p.vertices for p in pieces]),
+                                              np.concatenate([p.faces + k for p, k in zip(pieces, offsets)]),
+                                              _viewpoints(scene, object_id))
+            for piece in pieces:
+                mat, rho, le = material_row(piece.material)
+                b.optics = optics(piece.material)
+                inner = seen_inside or any(c > 0 for c in piece.material.kt)
+                v, t = _split_triangles(piece.vertices, piece.faces, patch_size)
+                b.add(v, t, True, inner, rho, le, object_id, mat, n_groups, True)  # the display smooths per solid
+                n_groups += 1
+            continue
         if obj.type in ("mesh", "triangle"):
             m = prepare_mesh(obj, world)
             tris = np.asarray(m.polygons, np.int64)
