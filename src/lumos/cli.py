@@ -191,7 +191,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     sheet = commands.add_parser("sheet", help="render a scene with every method, side by side in one image",
                                 description="Render SCENE with each method (and each shading of raster) and "
-                                "write the renders as one labelled grid with their render times.")
+                                "write the renders as one labelled grid with their render times (and, with --reference, their "
+                                "errors against one of them).")
     sheet.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
     sheet.add_argument("-o", "--output", metavar="OUT", help="sheet to write: .png or .jpg "
                        "(default: <scene name>-sheet.png in the current folder)")
