@@ -428,8 +428,8 @@ def test_captions_get_a_figures_line(capsys, fakes, tiny, tmp_path):
         assert dark_pixels(third) > 20 or (third.min(axis=2) < 200).sum() > 20, f"caption {i} has no third line"
 
 
-@pytest.mark.parametrize("reference, columns, diff_rows", [("ramp", 3, 1), ("raster:flat", 3, 2),
-                                                            ("raster:flat", None, 1)])
+@pytest.mark.parametrize("reference, columns, diff_rows", [("ramp", 3, [0]), ("raster:flat", 3, [0, 1]),
+                                                            ("raster:flat", None, [0]), ("raster:flat", 1, [1, 2, 3])])
 def test_diff_adds_rows_of_difference_images_on_one_scale(fakes, tiny, reference, columns, diff_rows):
     from lumos import metrics
 
@@ -438,8 +438,8 @@ def test_diff_adds_rows_of_difference_images_on_one_scale(fakes, tiny, reference
     lay = sheet.layout(4, columns, 32, 24, figures=True, diff_rows=diff_rows)
     assert image.size == (lay.width, lay.height) and plain.size[1] == sheet.layout(4, columns, 32, 24,
                                                                                      figures=True).height
-    # the sheet grows by the legend and the rows (trailing rows that would only hold the reference are left out)
-    assert image.size[1] - plain.size[1] == lay.legend_h + diff_rows * (24 + lay.diff_caption_h + sheet.MARGIN)
+    # the sheet grows by the legend and the rows (none for a row that would only hold the reference)
+    assert image.size[1] - plain.size[1] == lay.legend_h + len(diff_rows) * (24 + lay.diff_caption_h + sheet.MARGIN)
     pixels = np.asarray(image)
     assert [c["box"] for c in cells] == [c["box"] for c in plain_cells]  # the grid above is where it was
     ref = next(c for c in cells if c["reference"])

@@ -361,7 +361,7 @@ class Layout:
     slot_w: int     # column width: the cell, or MIN_SLOT_WIDTH if the cell is narrower
     header_h: int   # title and info lines, with the margin above them and the gap below
     caption_h: int  # label and time lines under each cell (and the figures line, with a reference)
-    diff_rows: int = 0       # rows of difference images under the grid, each like the grid's row above
+    diff_rows: tuple[int, ...] = ()  # the grid rows that have a row of difference images under the grid
     legend_h: int = 0        # the difference images' colour scale, between the grid and them
     diff_caption_h: int = 0  # the label line under each difference image
 
@@ -375,7 +375,7 @@ class Layout:
 
     @property
     def height(self) -> int:
-        diffs = self.legend_h + self.diff_rows * (self.cell_h + self.diff_caption_h + MARGIN) if self.diff_rows else 0
+        diffs = self.legend_h + len(self.diff_rows) * (self.cell_h + self.diff_caption_h + MARGIN)
         return self.header_h + self.grid_h + diffs
 
     def slot(self, i: int) -> tuple[int, int]:
@@ -384,24 +384,28 @@ class Layout:
         return MARGIN + col * (self.slot_w + MARGIN), self.header_h + row * (self.cell_h + self.caption_h + MARGIN)
 
     def diff_slot(self, i: int) -> tuple[int, int]:
-        """Top-left corner of the slot of cell `i`'s difference image: same column, and row, as the cell's."""
+        """Top-left corner of the slot of cell `i`'s difference image: the cell's column, in the difference row
+        of the cell's row (which must be one of `diff_rows`)."""
         row, col = divmod(i, self.columns)
+        k = self.diff_rows.index(row)
         return (MARGIN + col * (self.slot_w + MARGIN),
-                self.header_h + self.grid_h + self.legend_h + row * (self.cell_h + self.diff_caption_h + MARGIN))
+                self.header_h + self.grid_h + self.legend_h + k * (self.cell_h + self.diff_caption_h + MARGIN))
 
 
 def layout(n: int, columns: Optional[int], cell_w: int, cell_h: int, *, figures: bool = False,
-           diff_rows: int = 0) -> Layout:
+           diff_rows: Iterable[int] = ()) -> Layout:
     """The `Layout` of `n` cells; `columns` None means min(MAX_COLUMNS, n), more than `n` means `n`.
 
-    figures: the captions have a third line (error figures against a reference); diff_rows: rows of difference
-    images under the grid (0: none), with the legend above them.
+    figures: the captions have a third line (error figures against a reference); diff_rows: the grid rows (from
+    0) whose cells have difference images, each such row getting a row of them under the grid, in order, with
+    the legend above them (none: no legend).
     """
+    diff_rows = tuple(sorted(set(diff_rows)))
     columns = min(columns or MAX_COLUMNS, n)
     fonts = _fonts()
     header_h = MARGIN + _line_height(fonts["title"]) + _line_height(fonts["info"]) + MARGIN // 2
     caption_h = CAPTION_PAD + _line_height(fonts["label"]) + _line_height(fonts["time"]) * (2 if figures else 1)
-    legend_h = 2 * _line_height(fonts["info"]) + CAPTION_PAD if diff_rows else 0
+    legend_h = 2 * _line_height(fonts["info"]) + 2 * CAPTION_PAD if diff_rows else 0
     diff_caption_h = CAPTION_PAD + _line_height(fonts["time"]) if diff_rows else 0
     return Layout(columns, -(-n // columns), cell_w, cell_h, max(cell_w, MIN_SLOT_WIDTH), header_h, caption_h,
                   diff_rows, legend_h, diff_caption_h)
@@ -426,7 +430,7 @@ def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str =
     with_diff = [i for i, c in enumerate(cells) if diff and ref is not None and c.get("figures") is not None]
     columns = min(columns or MAX_COLUMNS, len(cells))
     lay = layout(len(cells), columns, max(w for w, _ in sizes), max(h for _, h in sizes), figures=ref is not None,
-                 diff_rows=with_diff[-1] // columns + 1 if with_diff else 0)  # no empty rows at the end
+                 diff_rows=[i // columns for i in with_diff])  # no row of differences where there are none
     sheet = PILImage.new("RGB", (lay.width, lay.height), BACKGROUND)
     draw = ImageDraw.Draw(sheet)
     fonts = _fonts()
@@ -477,7 +481,7 @@ def _draw_diffs(sheet, draw, lay: Layout, cells: list[dict], slots: list[int], r
     # legend: what the images show, and the colour bar from 0 to the scale's maximum
     y = lay.header_h + lay.grid_h
     info_h = _line_height(fonts["info"])
-    text = "difference from the reference, |cell - reference|: largest channel, linear radiance"
+    text = "difference from the reference, |cell - reference|: largest channel, linear radiance, one scale"
     draw.text((MARGIN, y), _fit(draw, text, fonts["info"], lay.width - 2 * MARGIN), fill=INK, font=fonts["info"])
     y += info_h
     draw.text((MARGIN, y), "0", fill=MUTED, font=fonts["info"])
@@ -487,7 +491,9 @@ def _draw_diffs(sheet, draw, lay: Layout, cells: list[dict], slots: list[int], r
     sheet.paste(PILImage.fromarray(bar, mode="RGB"), (bar_x, bar_y))
     draw.rectangle((bar_x - 1, bar_y - 1, bar_x + LEGEND_BAR_W, bar_y + LEGEND_BAR_H), outline=FRAME)
     tail_x = bar_x + LEGEND_BAR_W + round(draw.textlength(" ", font=fonts["info"]))
-    tail = _fit(draw, f"{scale:.3g} and more · one scale for every image", fonts["info"], lay.width - MARGIN - tail_x)
+    tail = f"{scale:.3g} and more"
+    if draw.textlength(tail, font=fonts["info"]) > lay.width - MARGIN - tail_x:
+        tail = f"{scale:.3g}"  # a narrow sheet: the maximum alone
     draw.text((tail_x, y), tail, fill=MUTED, font=fonts["info"])
     for cell, i in zip(cells, slots):
         img = cell["image"]
