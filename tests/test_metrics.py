@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from lumos.errors import LumosError
-from lumos.metrics import compare, diff_image
+from lumos.metrics import compare, diff_image, error_map, heat_ramp
 
 
 def test_identical_images():
@@ -71,3 +71,37 @@ def test_diff_image_marks_non_finite_as_largest():
     heat = diff_image(a, b)
     np.testing.assert_allclose(heat[0, 0], [1, 1, 1])
     np.testing.assert_allclose(heat[0, 1], [1, 1, 1])  # the largest finite error is also t = 1
+
+
+def test_error_map_is_the_largest_channel_difference():
+    b = np.zeros((1, 3, 3))
+    a = b.copy()
+    a[0, 0] = [0.1, -0.4, 0.2]  # |a - b| largest in green
+    a[0, 1, 2] = np.nan
+    err = error_map(a, b)
+    assert err.shape == (1, 3) and err.dtype == np.float64
+    np.testing.assert_allclose(err[0, [0, 2]], [0.4, 0.0])
+    assert err[0, 1] == np.inf  # NaN in either image: an infinite error
+    np.testing.assert_allclose(error_map(np.full((2, 2), 0.25), np.zeros((2, 2))), 0.25)  # (H, W) images too
+
+
+def test_heat_ramp_stops():
+    np.testing.assert_allclose(heat_ramp(np.array([0.0, 1 / 3, 0.5, 2 / 3, 1.0, 7.0, -1.0])),
+                               [[0, 0, 0], [1, 0, 0], [1, 0.5, 0], [1, 1, 0], [1, 1, 1], [1, 1, 1], [0, 0, 0]],
+                               atol=1e-6)
+
+
+def test_diff_image_with_a_fixed_scale():
+    """With `scale`, t = error / scale whatever the image's largest error: two maps on one scale compare."""
+    b = np.zeros((1, 3, 3), dtype=np.float32)
+    a = b.copy()
+    a[0, 0, 0] = 0.125  # half the scale: t = 0.5, orange
+    a[0, 1, 1] = 0.25   # the scale: white
+    a[0, 2, 2] = 3.0    # beyond it: white too
+    heat = diff_image(a, b, scale=0.25)
+    np.testing.assert_allclose(heat[0], [[1, 0.5, 0], [1, 1, 1], [1, 1, 1]], atol=1e-6)
+    small = diff_image(a[:, :1], b[:, :1], scale=0.25)  # alone, the half-scale pixel keeps its colour
+    np.testing.assert_allclose(small[0, 0], [1, 0.5, 0], atol=1e-6)
+    np.testing.assert_allclose(diff_image(a[:, :1], b[:, :1])[0, 0], [1, 1, 1])  # without a scale: its own peak
+    with pytest.raises(LumosError, match="scale must be positive"):
+        diff_image(a, b, scale=0.0)

@@ -7,11 +7,14 @@ with the real `raycast`.
 """
 
 import io
+import re
 import sys
 import types
+from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from PIL import Image as PILImage
 
 import lumos
@@ -358,3 +361,183 @@ def test_adaptive_anti_aliasing_becomes_supersampling_for_the_other_methods(fake
     monkeypatch.setitem(api.METHODS, "whitted", api.METHODS["ramp"])
     jobs = sheet._jobs(lumos.scene.loader.load_scene(path), [("whitted", {"method": "whitted"})], {}, None)
     assert "antialias" not in jobs[0][1] and jobs[0][0] == "whitted"  # whitted keeps its own
+
+
+# ------------------------------------------------------------------------------ --reference and --diff
+
+
+def test_reference_syntax():
+    assert sheet.parse_reference("whitted") == ("whitted", None)
+    assert sheet.parse_reference(" raster:gouraud ") == ("raster", "gouraud")
+    assert sheet.parse_reference("raster") == ("raster", None)
+    choices = sheet.reference_choices()
+    assert choices[:5] == ["raycast", "raster", "raster:flat", "raster:gouraud", "raster:phong"]
+    for text, message in [("", "name the method of one cell"), ("nope", "unknown method 'nope' (choose from"),
+                          ("whitted:phong", "only raster has shadings"),
+                          ("raster:toon", "unknown raster shading 'toon' (choose from flat, gouraud, phong)")]:
+        with pytest.raises(LumosError, match=re.escape(message)):
+            sheet.parse_reference(text)
+
+
+def test_figures_are_the_metrics_of_each_cell_against_the_reference(fakes, tiny):
+    from lumos import metrics
+
+    _, cells = sheet.make_sheet(tiny, reference="raster:gouraud", warm_up=False)
+    ref = cells[1]
+    assert ref["reference"] and ref["figures"] is None and ref["label"] == "raster · Gouraud"
+    for cell in (cells[0], cells[2], cells[3]):
+        assert not cell["reference"]
+        assert cell["figures"] == metrics.compare(cell["image"].array, ref["image"].array)
+        assert cell["figures"]["rmse"] > 0.01 and cell["figures"]["mean_rel_error"] > 0.01
+    # without a reference no cell has figures
+    _, plain = sheet.make_sheet(tiny, warm_up=False)
+    assert all(c["figures"] is None and not c["reference"] and c["diff_box"] is None for c in plain)
+
+
+def test_raster_alone_names_the_cell_of_the_scenes_shading(fakes, tmp_path, tiny):
+    _, cells = sheet.make_sheet(tiny, reference="raster", warm_up=False)
+    assert [c["reference"] for c in cells] == [False, False, True, False]  # the scene's default, phong
+    gouraud = tmp_path / "gouraud.yaml"
+    gouraud.write_text(TINY.replace("height: 24}", "height: 24, shading: gouraud}"))
+    _, cells = sheet.make_sheet(gouraud, reference="raster", warm_up=False)
+    assert [c["reference"] for c in cells] == [False, True, False, False]
+
+
+def test_the_reference_renders_first_and_progress_gives_the_figures(capsys, fakes, tiny, tmp_path):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.png", "--reference", "ramp")
+    assert code == 0, err
+    assert [(s.method, s.shading) for s in fakes[-4:]] == [("ramp", "phong"), ("raster", "flat"),
+                                                           ("raster", "gouraud"), ("raster", "phong")]
+    lines = [line for line in err.splitlines() if "] " in line]
+    assert lines[0].startswith("lumos: sheet [4/4] ramp: 32x24, ") and lines[0].endswith(", reference")
+    assert lines[1].startswith("lumos: sheet [1/4] raster · flat: 32x24, ")
+    assert ", RMSE 0." in lines[1] and " · rel. err. " in lines[1] and lines[1].endswith("%")
+
+
+def test_captions_get_a_figures_line(capsys, fakes, tiny, tmp_path):
+    plain, with_ref = tmp_path / "plain.png", tmp_path / "ref.png"
+    assert run(capsys, "sheet", tiny, "-o", plain, "-q")[0] == 0
+    assert run(capsys, "sheet", tiny, "-o", with_ref, "-q", "--reference", "raster:flat")[0] == 0
+    lay, lay_ref = sheet.layout(4, None, 32, 24), sheet.layout(4, None, 32, 24, figures=True)
+    assert lay_ref.caption_h - lay.caption_h == sheet._line_height(sheet._fonts()["time"])
+    pixels = read_png(with_ref)
+    assert pixels.shape[:2] == (lay_ref.height, lay_ref.width) and read_png(plain).shape[0] == lay.height
+    for i in range(4):  # the third caption line: "reference" or the figures, both text
+        x, y = lay_ref.slot(i)
+        third = pixels[y + 24 + lay.caption_h : y + 24 + lay_ref.caption_h, x : x + lay_ref.slot_w]
+        assert dark_pixels(third) > 20 or (third.min(axis=2) < 200).sum() > 20, f"caption {i} has no third line"
+
+
+@pytest.mark.parametrize("reference, columns, diff_rows", [("ramp", 3, [0]), ("raster:flat", 3, [0, 1]),
+                                                            ("raster:flat", None, [0]), ("raster:flat", 1, [1, 2, 3])])
+def test_diff_adds_rows_of_difference_images_on_one_scale(fakes, tiny, reference, columns, diff_rows):
+    from lumos import metrics
+
+    plain, plain_cells = sheet.make_sheet(tiny, columns=columns, reference=reference, warm_up=False)
+    image, cells = sheet.make_sheet(tiny, columns=columns, reference=reference, diff=True, warm_up=False)
+    lay = sheet.layout(4, columns, 32, 24, figures=True, diff_rows=diff_rows)
+    assert image.size == (lay.width, lay.height) and plain.size[1] == sheet.layout(4, columns, 32, 24,
+                                                                                     figures=True).height
+    # the sheet grows by the legend and the rows (none for a row that would only hold the reference)
+    assert image.size[1] - plain.size[1] == lay.legend_h + len(diff_rows) * (24 + lay.diff_caption_h + sheet.MARGIN)
+    pixels = np.asarray(image)
+    assert [c["box"] for c in cells] == [c["box"] for c in plain_cells]  # the grid above is where it was
+    ref = next(c for c in cells if c["reference"])
+    scale = sheet.DIFF_SCALE / ref["image"].exposure
+    for i, cell in enumerate(cells):
+        if cell["reference"]:
+            assert cell["diff_box"] is None
+            continue
+        x, y = lay.diff_slot(i)
+        assert cell["diff_box"] == (x + (lay.slot_w - 32) // 2, y, 32, 24)
+        expected = film.quantize8(metrics.diff_image(cell["image"].array, ref["image"].array, scale=scale))
+        assert np.array_equal(crop(pixels, cell["diff_box"]), expected), cell["label"]
+        assert cell["diff_box"][1] > cell["box"][1] and cell["diff_box"][0] == cell["box"][0]  # under its cell
+    # the legend's colour bar holds the ramp from black to white
+    legend = pixels[lay.header_h + lay.grid_h : lay.header_h + lay.grid_h + lay.legend_h]
+    assert (legend == 0).all(axis=2).any() and ((legend[..., 0] > 200) & (legend[..., 2] < 60)).any()
+
+
+def test_a_failed_cell_has_no_figures_and_no_diff(broken, tiny):
+    _, cells = sheet.make_sheet(tiny, sheet.entries_for(["ramp", "broken"]), reference="ramp", diff=True,
+                                warm_up=False)
+    assert cells[1]["image"] is None and cells[1]["figures"] is None and cells[1]["diff_box"] is None
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--reference", "nope"], "--reference: unknown method 'nope' (choose from raster, raster:flat, "),
+    (["--reference", ""], "--reference: name the method of one cell"),
+    (["--reference", "ramp:phong"], "only raster has shadings"),
+    (["--reference", "raster:toon"], "unknown raster shading 'toon'"),
+    (["--reference", "raster", "--methods", "ramp"], "--reference: the sheet has no raster:phong cell (its cells: "
+                                                     "ramp)"),
+    (["--diff"], "--diff: difference images are against a reference cell: give --reference METHOD too"),
+])
+def test_bad_reference_fails_before_any_render(capsys, fakes, tiny, tmp_path, flags, message):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.png", *flags)
+    assert code == 2 and message in one_error_line(err)
+    assert fakes == [] and not (tmp_path / "s.png").exists()
+
+
+def test_a_reference_that_cannot_be_drawn_stops_the_sheet(capsys, broken, tiny, tmp_path):
+    code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.png", "-q", "--methods", "ramp,broken",
+                    "--reference", "broken")
+    line = one_error_line(err)
+    assert code == 2 and "--reference: the reference cell (broken) could not be rendered: " in line
+    assert "csg objects cannot be drawn by broken" in line
+    assert not (tmp_path / "s.png").exists()
+    assert len(broken) == 1  # the warm-up of ramp only: nothing rendered after the reference failed
+
+
+def test_help_gives_reference_and_diff(capsys):
+    assert cli.main(["sheet", "--help"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "--reference METHOD" in out and "raster:SHADING" in out and "--diff" in out
+    assert f"at {sheet.DIFF_SCALE} of the display's white" in out
+    for name in api.METHODS:
+        assert name in out
+
+
+# ----------------------------------------------------------------------------------------- every example
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+#: Radiosity kept cheap: each primitive one patch (a mesh triangle, a box face), a coarse tessellation, one
+#: shadow ray per form factor, no refinement and a few solver steps; the shading is not what is tested here.
+CHEAP_RADIOSITY = {"patch_size": 1e6, "subdivide": False, "visibility_samples": 1, "max_iterations": 4,
+                   "rays": 20000}
+
+
+def example_scenes() -> list[Path]:
+    """Every scene file under examples/ (YAML or JSON holding `objects`; other YAML, if any, is not a scene)."""
+    found = []
+    for path in sorted(p for ext in ("yaml", "yml", "json") for p in EXAMPLES.glob(f"**/*.{ext}")):
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        if isinstance(data, dict) and "objects" in data:
+            found.append(path)
+    return found
+
+
+def test_the_examples_are_found():
+    scenes = example_scenes()
+    assert len(scenes) >= 10 and EXAMPLES / "whitted" / "classic.yaml" in scenes
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", example_scenes(), ids=lambda p: str(p.relative_to(EXAMPLES)))
+def test_sheet_on_every_example(path):
+    """The sheet of every example, tiny (48x36, 1 spp, radiosity kept cheap), against raycast with diffs: each
+    cell either rendered, a finite image with finite figures, or is a failed cell that says why in one line."""
+    image, cells = sheet.make_sheet(path, width=48, height=36, spp=1, tessellation=8, radiosity=CHEAP_RADIOSITY,
+                                    warm_up=False, reference="raycast", diff=True)
+    assert image.size[0] > 0 and len(cells) == len(sheet.default_entries())
+    for cell in cells:
+        if cell["image"] is not None:
+            assert cell["error"] is None and np.isfinite(cell["image"].array).all(), cell["label"]
+            assert cell["image"].array.shape == (36, 48, 3)
+            if not cell["reference"]:
+                assert np.isfinite([cell["figures"]["rmse"], cell["figures"]["mean_rel_error"]]).all()
+                assert cell["diff_box"] is not None
+        else:
+            why = cell["error"]
+            assert isinstance(why, str) and why.strip() and "\n" not in why, (cell["label"], why)
+            assert cell["figures"] is None and cell["diff_box"] is None and cell["box"][2:] == (48, 36)

@@ -4,6 +4,7 @@
     lumos info SCENE
     lumos compare A B [--diff D.png]
     lumos sheet SCENE [-o OUT.png] [--width W] [--height H] [--spp N] [--threads T] [--columns C] [--methods M,...]
+                [--reference METHOD [--diff]]
     lumos explain SCENE --pixel X Y [--method M] [--json] [every render flag]
 
 Exit codes: 0 success; 2 bad input or usage (one line `lumos: error: <message>` on stderr); 1 internal error
@@ -217,7 +218,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     sheet = commands.add_parser("sheet", help="render a scene with every method, side by side in one image",
                                 description="Render SCENE with each method (and each shading of raster) and "
-                                "write the renders as one labelled grid with their render times.")
+                                "write the renders as one labelled grid with their render times (and, with --reference, their "
+                                "errors against one of them).")
     sheet.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
     sheet.add_argument("-o", "--output", metavar="OUT", help="sheet to write: .png or .jpg "
                        "(default: <scene name>-sheet.png in the current folder)")
@@ -228,6 +230,13 @@ def build_parser() -> argparse.ArgumentParser:
     sheet.add_argument("--threads", type=int, metavar="T", help="worker threads (default: all cores)")
     sheet.add_argument("--columns", type=int, metavar="C", help="renders per row (default: up to 4)")
     sheet.add_argument("--methods", metavar="M,...", help="only these methods, in this order (e.g. raster,raycast)")
+    sheet.add_argument("--reference", metavar="METHOD", help="compare every other cell with this one: its "
+                       "caption gets the RMSE and mean relative error against it (linear radiance). METHOD is a "
+                       "method (raycast, raster, whitted, path, radiosity; raster alone: the scene's shading) or "
+                       "raster:SHADING (raster:flat, raster:gouraud, raster:phong)")
+    sheet.add_argument("--diff", action="store_true", help="with --reference: add difference images under the "
+                       "grid, |cell - reference| (largest channel) on one false-colour scale, black 0 to white "
+                       "at 0.5 of the display's white")
     sheet.add_argument("-q", "--quiet", action="store_true", help="no progress lines and no summary")
     sheet.set_defaults(run=run_sheet)
     return parser
@@ -415,7 +424,8 @@ def run_sheet(args: argparse.Namespace, started: float) -> int:
     flags = ("width", "height", "spp", "threads")
     overrides = {key: getattr(args, key) for key in flags if getattr(args, key) is not None}
     image, cells = sheet.make_sheet(scene, entries, args.columns, progress=not args.quiet,
-                                    title=Path(args.scene).name, **overrides)
+                                    title=Path(args.scene).name, reference=args.reference, diff=args.diff,
+                                    **overrides)
     sheet.save_sheet(image, out)
     if not args.quiet:
         first, count = cells[0], f"{len(cells)} render{'s' if len(cells) > 1 else ''}"

@@ -2,6 +2,7 @@
 
     figures = compare(rendered, reference)      # {'rmse', 'psnr', 'mean_rel_error', 'max_abs_error'}
     heat = diff_image(rendered, reference)      # float32 (H, W, 3) in [0, 1], black where equal
+    heat = diff_image(rendered, reference, scale=0.25)   # the same colours mean the same error in every map
 
 Both take arrays of the same shape (float (H, W, 3) linear images, usually from `read_image`); `b` is the
 reference.
@@ -47,21 +48,42 @@ def compare(a: np.ndarray, b: np.ndarray) -> dict[str, float]:
     }
 
 
-def diff_image(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """A false-colour heat map of the per-pixel absolute error, float32 (H, W, 3) in [0, 1].
+def error_map(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per-pixel absolute error of `a` against `b`: the largest |a − b| over the channels, float64 (H, W).
 
-    The error of a pixel is the largest |a − b| over its channels, divided by the largest error in the image;
-    t = 0 is black (equal), then red, yellow and white at t = 1 (a black-body ramp). Identical images give
-    all black; pixels where either image is NaN or inf show as the largest error. a, b: (H, W, 3) or (H, W).
+    a, b: (H, W, 3) or (H, W). A pixel where either image is NaN or inf has error inf.
     """
     a, b = _pair(a, b)
     err = np.abs(a - b)
     if err.ndim == 3:
         err = err.max(axis=2)
-    bad = ~np.isfinite(err)  # NaN or inf in either image: shown as the largest error
+    err[~np.isfinite(err)] = np.inf
+    return err
+
+
+def heat_ramp(t: np.ndarray) -> np.ndarray:
+    """The false-colour ramp of the heat maps: t in [0, 1] (clamped) to float32 RGB in [0, 1].
+
+    A black-body ramp: black at 0, red at 1/3, yellow at 2/3, white at 1 (each channel rises linearly in turn).
+    """
+    t = np.asarray(t, dtype=np.float64)[..., None]
+    return np.clip(3.0 * t - np.array([0.0, 1.0, 2.0]), 0.0, 1.0).astype(np.float32)
+
+
+def diff_image(a: np.ndarray, b: np.ndarray, scale: float | None = None) -> np.ndarray:
+    """A false-colour heat map of the per-pixel absolute error, float32 (H, W, 3) in [0, 1].
+
+    The error of a pixel (`error_map`) is the largest |a − b| over its channels, divided by `scale`, or without
+    one by the largest error in the image; that t goes through `heat_ramp`: black (equal), red, yellow, white at
+    t ≥ 1. Identical images give all black; pixels where either image is NaN or inf show as the largest error.
+    a, b: (H, W, 3) or (H, W). scale: the error shown white, the same for every map that is to be compared.
+    """
+    err = error_map(a, b)
+    bad = np.isinf(err)
     err[bad] = 0.0
-    peak = err.max()
+    if scale is not None and not scale > 0:
+        raise LumosError(f"diff scale must be positive, got {scale}")
+    peak = float(err.max()) if scale is None else float(scale)
     t = err / peak if peak > 0 else err
     t[bad] = 1.0
-    ramp = np.stack([3.0 * t, 3.0 * t - 1.0, 3.0 * t - 2.0], axis=-1)
-    return np.clip(ramp, 0.0, 1.0).astype(np.float32)
+    return heat_ramp(t)

@@ -4,6 +4,8 @@ side in one labelled grid image, the figure the textbook asks readers to make.
     sheet, cells = make_sheet("scene.yaml", width=320, height=240)
     save_sheet(sheet, "sheet.png")
     cells[1]["label"], cells[1]["render_s"], cells[1]["image"]    # 'raster · Gouraud', 0.84, <lumos.Image>
+    sheet, cells = make_sheet("scene.yaml", reference="whitted", diff=True)
+    cells[1]["figures"]["rmse"], cells[1]["figures"]["mean_rel_error"]    # against the whitted cell
 
 Layout, in pixels (`layout` computes it; every column is `slot_w` wide, every row `cell_h + caption_h`):
 
@@ -12,12 +14,21 @@ Layout, in pixels (`layout` computes it; every column is `slot_w` wide, every ro
     MARGIN  cell  MARGIN  cell  MARGIN  ...   (up to `columns` cells a row)
             label          label
             time           time
+            figures        figures     (with a reference: its error figures, or "reference")
     MARGIN  cell  ...
+            legend: the diff colour scale   (with diff: the difference images, laid out as the cells)
+            diff           diff
+            label          label
 
 Each cell is the render's PNG encoding (`film.to_png8`, the path `Image.save` takes), pixel for pixel. Before
 the timed renders each (method, shading) pair is rendered once at WARMUP_SIZE, so a cell's time is its render
 alone, not Numba compiling (or loading from its cache) the kernel; that warm-up is the `compile` time of the
 info line, shared by all cells.
+
+With a reference cell (`--reference whitted`, `raster:phong`...), every other rendered cell is compared with it
+in linear radiance (`metrics.compare`: RMSE and mean relative error in its caption, all figures in its dict);
+with `diff`, each also gets a difference image, its largest-channel |cell − reference| through the heat ramp
+of `lumos compare --diff` on one fixed scale (DIFF_SCALE), under the grid in the same places as the cells.
 """
 
 from __future__ import annotations
@@ -29,6 +40,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Iterable, Optional
+
+import numpy as np
 
 from . import api, film
 from .errors import LumosError
@@ -59,6 +72,13 @@ PATH_MIN_SPP = 64
 ADAPTIVE_STAND_IN_SPP = 4
 #: Colour of a cell a method could not render, and of its text.
 FAILED, FAILED_INK = (242, 242, 242), (150, 40, 40)
+#: The error shown white in the difference images, in units of the display's white (linear radiance times
+#: `exposure`: 1 is the PNG's full white); one scale for every difference image of a sheet, so equal colours
+#: mean equal errors. Half of white: a missing texture or reflection saturates only where it is bright, and
+#: noise and shading differences still show.
+DIFF_SCALE = 0.5
+#: Size of the colour bar in the difference images' legend, pixels.
+LEGEND_BAR_W, LEGEND_BAR_H = 120, 10
 #: Output formats of a sheet, by extension.
 SHEET_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG"}
 
@@ -95,26 +115,82 @@ def entries_for(methods: Iterable[str]) -> list[tuple[str, dict]]:
     return [entry for name in names for entry in available if entry[1]["method"] == name]
 
 
+def reference_choices() -> list[str]:
+    """What `--reference` accepts with the methods registered now: each method, and `raster:SHADING`."""
+    choices = []
+    for name in api.METHODS:
+        choices.append(name)
+        if name == "raster":
+            choices += [f"raster:{shading}" for _, shading in RASTER_SHADINGS]
+    return choices
+
+
+def parse_reference(text: str) -> tuple[str, Optional[str]]:
+    """`METHOD` or `raster:SHADING` (`whitted`, `raster:phong`) -> (method, shading or None).
+
+    Raises LumosError, naming the choices, for an empty text, an unknown method or shading, or a shading given
+    to a method other than raster.
+    """
+    choices = ", ".join(reference_choices())
+    name, colon, shading = (part.strip() for part in str(text).partition(":"))
+    if not name:
+        raise LumosError(f"--reference: name the method of one cell (choose from {choices})")
+    if name not in api.METHODS:
+        raise LumosError(f"--reference: unknown method {name!r} (choose from {choices})")
+    if not colon:
+        return name, None
+    if name != "raster":
+        raise LumosError(f"--reference: {text!r}: only raster has shadings; write {name!r} alone")
+    shadings = [value for _, value in RASTER_SHADINGS]
+    if shading not in shadings:
+        raise LumosError(f"--reference: unknown raster shading {shading!r} (choose from {', '.join(shadings)})")
+    return name, shading
+
+
+def _reference_index(text: str, configs: list, default_shading: str) -> int:
+    """The index of the cell `text` names among cells rendered with `configs` (their RenderSettings).
+
+    `raster` alone is the raster cell with `default_shading` (the scene's, as `lumos render --method raster`);
+    another method is its first cell. Raises LumosError when the sheet has no such cell.
+    """
+    method, shading = parse_reference(text)
+    if method == "raster" and shading is None:
+        shading = default_shading
+    for i, cfg in enumerate(configs):
+        if cfg.method == method and (method != "raster" or cfg.shading == shading):
+            return i
+    named = f"raster:{shading}" if method == "raster" else method
+    cells = ", ".join(dict.fromkeys(f"raster:{c.shading}" if c.method == "raster" else c.method for c in configs))
+    raise LumosError(f"--reference: the sheet has no {named} cell (its cells: {cells})")
+
+
 # ----------------------------------------------------------------------------------------------- rendering
 
 
 def make_sheet(scene, entries: Optional[list[tuple[str, dict]]] = None, columns: Optional[int] = None,
                progress: bool = False, *, title: Optional[str] = None, warm_up: bool = True,
-               max_cell_width: Optional[int] = MAX_CELL_WIDTH, **settings):
+               max_cell_width: Optional[int] = MAX_CELL_WIDTH, reference: Optional[str] = None,
+               diff: bool = False, **settings):
     """Render `scene` once per entry and compose the renders into one labelled grid.
 
-    scene:    a Scene, a scene dict or a path.
-    entries:  `(label, settings)` pairs, default `default_entries()`; those whose method is not in
-              `api.METHODS` are skipped.
-    columns:  cells per row, default min(MAX_COLUMNS, number of cells).
-    progress: True prints one line per cell on stderr (and each render's progress bar).
-    title:    the sheet's title, default the scene file's name.
-    settings: override the scene's `render:` block for every cell (width, height, spp, threads ...). Without a
-              width, a scene wider than `max_cell_width` is rendered at that width with its aspect ratio kept.
+    scene:     a Scene, a scene dict or a path.
+    entries:   `(label, settings)` pairs, default `default_entries()`; those whose method is not in
+               `api.METHODS` are skipped.
+    columns:   cells per row, default min(MAX_COLUMNS, number of cells).
+    progress:  True prints one line per cell on stderr (and each render's progress bar).
+    title:     the sheet's title, default the scene file's name.
+    reference: the cell the others are compared with, `METHOD` or `raster:SHADING` (`parse_reference`); it is
+               rendered first, and the sheet fails (LumosError) if it cannot be.
+    diff:      with a reference, add the difference images under the grid (one scale: DIFF_SCALE).
+    settings:  override the scene's `render:` block for every cell (width, height, spp, threads ...). Without a
+               width, a scene wider than `max_cell_width` is rendered at that width with its aspect ratio kept.
 
     Returns `(sheet, cells)`: a `PIL.Image.Image` (RGB) and per cell a dict with label, method, shading,
-    render_s, image (the lumos `Image`) and box (x, y, width, height of the render in the sheet).
-    `sheet.info["compile_s"]` is the warm-up time.
+    width, height, render_s, image (the lumos `Image`), error (why the method could not draw the scene, or
+    None), box (x, y, width, height of the render in the sheet), reference (True for the reference cell),
+    figures (`metrics.compare` of the image against the reference's, linear: rmse, psnr, mean_rel_error,
+    max_abs_error; None for the reference, a cell not rendered, or without a reference) and diff_box (where
+    its difference image is, or None). `sheet.info["compile_s"]` is the warm-up time.
     """
     from .scene.loader import load_scene
 
@@ -122,36 +198,75 @@ def make_sheet(scene, entries: Optional[list[tuple[str, dict]]] = None, columns:
     scene = load_scene(scene)
     if columns is not None and columns < 1:
         raise LumosError(f"sheet: columns must be at least 1, got {columns}")
+    if diff and reference is None:
+        raise LumosError("--diff: difference images are against a reference cell: give --reference METHOD too")
     jobs = _jobs(scene, default_entries() if entries is None else entries, settings, max_cell_width)
     configs = [api.resolve_settings(scene, job) for _, job in jobs]  # every bad value fails before any render
+    ref = None if reference is None else _reference_index(reference, configs,
+                                                           settings.get("shading") or scene.render.shading)
     say = _say if progress else (lambda text: None)
 
     compile_s = _warm_up(scene, [job for _, job in jobs], progress, say) if warm_up else None
-    cells = []
-    for i, ((label, job), cfg) in enumerate(zip(jobs, configs), 1):
-        cell = {"label": label, "method": job["method"], "shading": job.get("shading"),
-                "width": cfg.width, "height": cfg.height}
-        try:
-            img = api.render(scene, progress=progress, **job)
-        except LumosError as exc:  # this method cannot draw this scene: a cell that says why, not a failed sheet
-            why = one_line(exc)
-            if scene.source is not None and why.startswith(f"{scene.source}: "):
-                why = why[len(f"{scene.source}: "):]  # the sheet's title names the file
-            cells.append({**cell, "render_s": None, "image": None, "error": why})
-            say(f"[{i}/{len(jobs)}] {label}: not rendered: {why}")
-            continue
-        cells.append({**cell, "render_s": float(img.stats["render_s"]), "image": img, "error": None})
-        say(f"[{i}/{len(jobs)}] {label}: {img.width}x{img.height}, {format_seconds(img.stats['render_s'])}")
+    cells: list[Optional[dict]] = [None] * len(jobs)
+    # the reference first: if it cannot be drawn the sheet stops before the other renders, and each later
+    # cell's progress line can give its figures
+    order = list(range(len(jobs))) if ref is None else [ref] + [i for i in range(len(jobs)) if i != ref]
+    for i in order:
+        cell = cells[i] = _render_cell(scene, jobs[i], configs[i], progress)
+        cell["reference"] = i == ref
+        if i == ref and cell["image"] is None:
+            raise LumosError(f"--reference: the reference cell ({cell['label']}) could not be rendered: "
+                             f"{cell['error']}")
+        if ref is not None and i != ref and cell["image"] is not None:
+            cell["figures"] = _figures(cell, cells[ref])
+        say(f"[{i + 1}/{len(jobs)}] {cell['label']}: " + _progress_text(cell))
 
     if all(cell["image"] is None for cell in cells):
         raise LumosError(f"sheet: no method could render the scene ({cells[0]['label']}: {cells[0]['error']})")
     cfg = configs[0]
     same_size = all((c.width, c.height) == (cfg.width, cfg.height) for c in configs)
     info = [f"{cfg.width}x{cfg.height}" if same_size else "", f"{cfg.spp} spp" if same_size else "",
-            f"compile {format_seconds(compile_s)}" if compile_s is not None else ""]
-    sheet = compose_sheet(cells, columns, title=title, info=" · ".join(part for part in info if part))
+            f"compile {format_seconds(compile_s)}" if compile_s is not None else "",
+            f"errors against {cells[ref]['label']}" if ref is not None else ""]
+    sheet = compose_sheet(cells, columns, title=title, info=" · ".join(part for part in info if part), diff=diff)
     sheet.info["compile_s"] = compile_s
     return sheet, cells
+
+
+def _render_cell(scene, entry: tuple[str, dict], cfg, progress: bool) -> dict:
+    """Render one cell: its dict, with image and render_s, or error (one line) where the method cannot."""
+    label, job = entry
+    cell = {"label": label, "method": job["method"], "shading": job.get("shading"), "width": cfg.width,
+            "height": cfg.height, "figures": None, "diff_box": None}
+    try:
+        img = api.render(scene, progress=progress, **job)
+    except LumosError as exc:  # this method cannot draw this scene: a cell that says why, not a failed sheet
+        why = one_line(exc)
+        if scene.source is not None and why.startswith(f"{scene.source}: "):
+            why = why[len(f"{scene.source}: "):]  # the sheet's title names the file
+        return {**cell, "render_s": None, "image": None, "error": why}
+    return {**cell, "render_s": float(img.stats["render_s"]), "image": img, "error": None}
+
+
+def _figures(cell: dict, ref: dict) -> dict[str, float]:
+    """`metrics.compare` of a cell's linear image against the reference cell's (same size, or LumosError)."""
+    from . import metrics
+
+    img, ref_img = cell["image"], ref["image"]
+    if (img.width, img.height) != (ref_img.width, ref_img.height):
+        raise LumosError(f"--reference: cell {cell['label']} is {img.width}x{img.height} and the reference "
+                         f"({ref['label']}) {ref_img.width}x{ref_img.height}: only images of one size compare")
+    return metrics.compare(img.array, ref_img.array)
+
+
+def _progress_text(cell: dict) -> str:
+    """`48x36, 0.12 s`, then `, reference` or `, RMSE 0.0123 · rel. err. 4.5%`; or `not rendered: why`."""
+    if cell["image"] is None:
+        return f"not rendered: {cell['error']}"
+    text = f"{cell['image'].width}x{cell['image'].height}, {format_seconds(cell['render_s'])}"
+    if cell.get("reference"):
+        return text + ", reference"
+    return text + (f", {format_figures(cell['figures'])}" if cell.get("figures") else "")
 
 
 def _jobs(scene, entries, settings: dict, max_cell_width: Optional[int]) -> list[tuple[str, dict]]:
@@ -214,6 +329,17 @@ def _say(text: str) -> None:
     print(f"lumos: sheet {text}", file=sys.stderr, flush=True)
 
 
+def format_figures(figures: dict) -> str:
+    """A cell's error figures as its caption gives them: `RMSE 0.0123 · rel. err. 4.5%`."""
+    return f"RMSE {figures['rmse']:.3g} · rel. err. {format_percent(figures['mean_rel_error'])}"
+
+
+def format_percent(fraction: float) -> str:
+    """`4.5%`, `0.12%`, `12%`, `345%` (two significant figures, whole percents from 100%)."""
+    percent = 100.0 * fraction
+    return f"{percent:.0f}%" if abs(percent) >= 100 else f"{percent:.2g}%"
+
+
 def format_seconds(seconds: float) -> str:
     """`0.84 s`, `12.3 s`, `4.2 ms`."""
     if seconds < 0.005:
@@ -234,7 +360,14 @@ class Layout:
     cell_h: int
     slot_w: int     # column width: the cell, or MIN_SLOT_WIDTH if the cell is narrower
     header_h: int   # title and info lines, with the margin above them and the gap below
-    caption_h: int  # label and time lines under each cell
+    caption_h: int  # label and time lines under each cell (and the figures line, with a reference)
+    diff_rows: tuple[int, ...] = ()  # the grid rows that have a row of difference images under the grid
+    legend_h: int = 0        # the difference images' colour scale, between the grid and them
+    diff_caption_h: int = 0  # the label line under each difference image
+
+    @property
+    def grid_h(self) -> int:
+        return self.rows * (self.cell_h + self.caption_h + MARGIN)
 
     @property
     def width(self) -> int:
@@ -242,27 +375,49 @@ class Layout:
 
     @property
     def height(self) -> int:
-        return self.header_h + self.rows * (self.cell_h + self.caption_h + MARGIN)
+        diffs = self.legend_h + len(self.diff_rows) * (self.cell_h + self.diff_caption_h + MARGIN)
+        return self.header_h + self.grid_h + diffs
 
     def slot(self, i: int) -> tuple[int, int]:
         """Top-left corner of cell `i`'s column slot (row-major)."""
         row, col = divmod(i, self.columns)
         return MARGIN + col * (self.slot_w + MARGIN), self.header_h + row * (self.cell_h + self.caption_h + MARGIN)
 
+    def diff_slot(self, i: int) -> tuple[int, int]:
+        """Top-left corner of the slot of cell `i`'s difference image: the cell's column, in the difference row
+        of the cell's row (which must be one of `diff_rows`)."""
+        row, col = divmod(i, self.columns)
+        k = self.diff_rows.index(row)
+        return (MARGIN + col * (self.slot_w + MARGIN),
+                self.header_h + self.grid_h + self.legend_h + k * (self.cell_h + self.diff_caption_h + MARGIN))
 
-def layout(n: int, columns: Optional[int], cell_w: int, cell_h: int) -> Layout:
-    """The `Layout` of `n` cells; `columns` None means min(MAX_COLUMNS, n), more than `n` means `n`."""
+
+def layout(n: int, columns: Optional[int], cell_w: int, cell_h: int, *, figures: bool = False,
+           diff_rows: Iterable[int] = ()) -> Layout:
+    """The `Layout` of `n` cells; `columns` None means min(MAX_COLUMNS, n), more than `n` means `n`.
+
+    figures: the captions have a third line (error figures against a reference); diff_rows: the grid rows (from
+    0) whose cells have difference images, each such row getting a row of them under the grid, in order, with
+    the legend above them (none: no legend).
+    """
+    diff_rows = tuple(sorted(set(diff_rows)))
     columns = min(columns or MAX_COLUMNS, n)
     fonts = _fonts()
     header_h = MARGIN + _line_height(fonts["title"]) + _line_height(fonts["info"]) + MARGIN // 2
-    caption_h = CAPTION_PAD + _line_height(fonts["label"]) + _line_height(fonts["time"])
-    return Layout(columns, -(-n // columns), cell_w, cell_h, max(cell_w, MIN_SLOT_WIDTH), header_h, caption_h)
+    caption_h = CAPTION_PAD + _line_height(fonts["label"]) + _line_height(fonts["time"]) * (2 if figures else 1)
+    legend_h = 2 * _line_height(fonts["info"]) + 2 * CAPTION_PAD if diff_rows else 0
+    diff_caption_h = CAPTION_PAD + _line_height(fonts["time"]) if diff_rows else 0
+    return Layout(columns, -(-n // columns), cell_w, cell_h, max(cell_w, MIN_SLOT_WIDTH), header_h, caption_h,
+                  diff_rows, legend_h, diff_caption_h)
 
 
-def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str = "", info: str = ""):
+def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str = "", info: str = "",
+                  diff: bool = False):
     """Draw `cells` (dicts with label, render_s and image, a lumos `Image`) as a grid; returns a PIL RGB image.
 
-    Sets each cell's "box": (x, y, width, height) of its render in the sheet.
+    A cell whose "reference" is true is captioned "reference", one with "figures" gets them in its caption;
+    with `diff`, every cell with figures also gets its difference image against the reference cell's image.
+    Sets each cell's "box": (x, y, width, height) of its render in the sheet, and "diff_box" (or None).
     """
     from PIL import Image as PILImage
     from PIL import ImageDraw
@@ -271,7 +426,11 @@ def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str =
         raise LumosError("sheet: no cells to draw")
     sizes = [(c["image"].width, c["image"].height) if c.get("image") is not None else (c["width"], c["height"])
              for c in cells]
-    lay = layout(len(cells), columns, max(w for w, _ in sizes), max(h for _, h in sizes))
+    ref = next((c for c in cells if c.get("reference")), None)
+    with_diff = [i for i, c in enumerate(cells) if diff and ref is not None and c.get("figures") is not None]
+    columns = min(columns or MAX_COLUMNS, len(cells))
+    lay = layout(len(cells), columns, max(w for w, _ in sizes), max(h for _, h in sizes), figures=ref is not None,
+                 diff_rows=[i // columns for i in with_diff])  # no row of differences where there are none
     sheet = PILImage.new("RGB", (lay.width, lay.height), BACKGROUND)
     draw = ImageDraw.Draw(sheet)
     fonts = _fonts()
@@ -292,10 +451,59 @@ def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str =
         draw.rectangle((x - 1, slot_y - 1, x + w, slot_y + h), outline=FRAME)
         y = slot_y + lay.cell_h + CAPTION_PAD
         when = format_seconds(cell["render_s"]) if cell.get("render_s") is not None else "not rendered"
-        for text, font, colour in ((cell["label"], fonts["label"], INK), (when, fonts["time"], MUTED)):
+        lines = [(cell["label"], fonts["label"], INK), (when, fonts["time"], MUTED)]
+        if cell.get("reference"):
+            lines.append(("reference", fonts["time"], INK))
+        elif cell.get("figures") is not None:
+            lines.append((format_figures(cell["figures"]), fonts["time"], MUTED))
+        for text, font, colour in lines:
             _centred(draw, text, font, colour, slot_x, lay.slot_w, y)
             y += _line_height(font)
+        cell["diff_box"] = None
+    if with_diff:
+        _draw_diffs(sheet, draw, lay, [cells[i] for i in with_diff], with_diff, ref)
     return sheet
+
+
+def diff_scale(exposure: float = 1.0) -> float:
+    """The error (linear radiance) that the difference images show white: DIFF_SCALE of the display's white."""
+    return DIFF_SCALE / exposure
+
+
+def _draw_diffs(sheet, draw, lay: Layout, cells: list[dict], slots: list[int], ref: dict) -> None:
+    """The legend, then each cell's difference image against `ref` in its slot `slots[k]`, with its label."""
+    from PIL import Image as PILImage
+
+    from . import metrics
+
+    fonts = _fonts()
+    scale = diff_scale(ref["image"].exposure)
+    # legend: what the images show, and the colour bar from 0 to the scale's maximum
+    y = lay.header_h + lay.grid_h
+    info_h = _line_height(fonts["info"])
+    text = "difference from the reference, |cell - reference|: largest channel, linear radiance, one scale"
+    draw.text((MARGIN, y), _fit(draw, text, fonts["info"], lay.width - 2 * MARGIN), fill=INK, font=fonts["info"])
+    y += info_h
+    draw.text((MARGIN, y), "0", fill=MUTED, font=fonts["info"])
+    bar_x = MARGIN + round(draw.textlength("0 ", font=fonts["info"]))
+    bar_y = y + (info_h - 3 - LEGEND_BAR_H) // 2
+    bar = film.quantize8(metrics.heat_ramp(np.linspace(0.0, 1.0, LEGEND_BAR_W)[None, :].repeat(LEGEND_BAR_H, 0)))
+    sheet.paste(PILImage.fromarray(bar, mode="RGB"), (bar_x, bar_y))
+    draw.rectangle((bar_x - 1, bar_y - 1, bar_x + LEGEND_BAR_W, bar_y + LEGEND_BAR_H), outline=FRAME)
+    tail_x = bar_x + LEGEND_BAR_W + round(draw.textlength(" ", font=fonts["info"]))
+    tail = f"{scale:.3g} and more"
+    if draw.textlength(tail, font=fonts["info"]) > lay.width - MARGIN - tail_x:
+        tail = f"{scale:.3g}"  # a narrow sheet: the maximum alone
+    draw.text((tail_x, y), tail, fill=MUTED, font=fonts["info"])
+    for cell, i in zip(cells, slots):
+        img = cell["image"]
+        slot_x, slot_y = lay.diff_slot(i)
+        x = slot_x + (lay.slot_w - img.width) // 2
+        heat = metrics.diff_image(img.array, ref["image"].array, scale=scale)
+        sheet.paste(PILImage.fromarray(film.quantize8(heat), mode="RGB"), (x, slot_y))
+        draw.rectangle((x - 1, slot_y - 1, x + img.width, slot_y + img.height), outline=FRAME)
+        cell["diff_box"] = (x, slot_y, img.width, img.height)
+        _centred(draw, cell["label"], fonts["time"], MUTED, slot_x, lay.slot_w, slot_y + lay.cell_h + CAPTION_PAD)
 
 
 def _wrapped(draw, text: str, font, colour, x: int, y: int, width: int, height: int) -> None:
