@@ -221,3 +221,17 @@ def test_lumos_error_is_exit_2(capsys, monkeypatch, tiny):
     monkeypatch.setattr("lumos.scene.loader.load_scene", refuse)
     code, _, err = run(capsys, "info", tiny)
     assert code == 2 and one_error_line(err) == "lumos: error: nope: bad input"
+
+
+def test_a_scene_with_adaptive_antialiasing_renders_with_another_method(tmp_path, capsys):
+    # the scene file asks for whitted's adaptive anti-aliasing; --method raster supersamples instead, and says so
+    scene = tmp_path / "s.yaml"
+    scene.write_text("render: {method: whitted, antialias: adaptive, width: 16, height: 12}\n"
+                     "lights: [{type: directional, direction: [0, 0, -1]}]\n"
+                     "objects: [{type: sphere, radius: 1}]\n")
+    out = tmp_path / "r.png"
+    assert cli.main(["render", str(scene), "--method", "raster", "-o", str(out), "-q", "--aov", "samples"]) == 0
+    assert "supersamples at 4 spp" in capsys.readouterr().err
+    assert out.exists()
+    # given as a flag, adaptive with another method is still refused
+    assert cli.main(["render", str(scene), "--method", "raster", "--antialias", "adaptive", "-o", str(out)]) == 2

@@ -166,10 +166,42 @@ def csg_figure():
     compose(panels, 2).save(OUT / "csg.png")
 
 
+def mipmap_figure():
+    """textures.yaml with mip-mapping and without, one above the other."""
+    scene = load("textures.yaml")
+    panels = [(f"mipmap: {str(on).lower()}", shot(scene, mipmap=on, width=560, height=350)) for on in (True, False)]
+    save(compose(panels, 1), "mipmap.png")
+
+
+def affine_uvs_figure():
+    """The floor of textures.yaml, perspective-correct uvs and screen-space (affine) ones."""
+    scene = load("textures.yaml")
+    scene.objects = scene.objects[:1]
+    scene.camera.look_at = (0.0, 0.0, -2.0)
+    panels = [(f"perspective_correct: {str(on).lower()}",
+               shot(scene, perspective_correct=on, tessellation=4, width=400, height=250)) for on in (True, False)]
+    save(compose(panels, 2), "affine_uvs.png")
+
+
+def terms_figure():
+    """`lumos sheet shading.yaml --terms` for Gouraud and for Phong: ambient, diffuse, specular, and the image."""
+    from lumos.sheet import make_terms_sheet
+
+    panels = []
+    for shading in ("gouraud", "phong"):
+        _, cells = make_terms_sheet(HERE / "shading.yaml", f"raster:{shading}", width=320, height=160)
+        for cell in cells:
+            if cell["label"] in ("ambient", "diffuse", "specular", "sum: the image"):
+                img = cell["image"]
+                name = "image" if cell["label"].startswith("sum") else cell["label"]
+                panels.append((f"{shading}: {name}", film.to_png8(img.array, img.exposure)))
+    save(compose(panels, 4), "terms.png")
+
+
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     for make in (shading_figure, sheet_figure, t_junctions_figure, subdivision_figure, orientation_figure,
-                 perspective_figure, crease_figure, csg_figure):
+                 perspective_figure, crease_figure, csg_figure, mipmap_figure, affine_uvs_figure, terms_figure):
         make()
 
 

@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import sys
 import time
+import warnings
 from typing import TYPE_CHECKING, Any, Callable, Optional
 
-from .errors import LumosError
+from .errors import LumosError, LumosWarning
 from .scene.model import PATH_AOVS, TERM_AOVS, RenderSettings, Scene
 
 if TYPE_CHECKING:
@@ -30,6 +31,10 @@ METHODS: dict[str, str] = {
 }
 
 _SETTING_KEYS = tuple(RenderSettings.model_fields)
+#: Samples per pixel of the supersampling that stands in for whitted's adaptive anti-aliasing in the other methods
+#: (adaptive_depth 3 spends 1 ray per pixel on flat areas and up to 64 on edges; 4 jittered samples per pixel is
+#: about its cost on the Whitted examples), when a scene asks for adaptive and another method is chosen.
+ADAPTIVE_STAND_IN_SPP = 4
 
 
 def method_names() -> tuple[str, ...]:
@@ -59,6 +64,15 @@ def resolve_settings(scene: Scene, overrides: dict[str, Any]) -> RenderSettings:
         raise LumosError(format_validation_error(exc, source="settings", prefix=("render",))) from None
     if settings.method not in METHODS:
         raise LumosError(f"render.method: unknown method {settings.method!r} (choose from {', '.join(METHODS)})")
+    if (settings.antialias == "adaptive" and settings.method != "whitted" and overrides.get("antialias") is None
+            and overrides.get("method") is not None):
+        # the scene file asks for whitted's adaptive anti-aliasing and the caller chose another method: that
+        # method supersamples at about adaptive's cost instead (as `lumos sheet` does); given as a setting of its
+        # own, adaptive with another method is still refused below
+        spp = settings.spp if overrides.get("spp") is not None else max(settings.spp, ADAPTIVE_STAND_IN_SPP)
+        settings = settings.model_copy(update={"antialias": "supersample", "spp": spp})
+        warnings.warn(LumosWarning(f"render.antialias: the scene's adaptive anti-aliasing is whitted's; "
+                                   f"{settings.method} supersamples at {spp} spp instead"), stacklevel=2)
     check_method_settings(settings)
     return settings
 

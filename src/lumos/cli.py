@@ -237,6 +237,9 @@ def build_parser() -> argparse.ArgumentParser:
     sheet.add_argument("--diff", action="store_true", help="with --reference: add difference images under the "
                        "grid, |cell - reference| (largest channel) on one false-colour scale, black 0 to white "
                        "at 0.5 of the display's white")
+    sheet.add_argument("--terms", metavar="METHOD", help="instead of one cell per method: METHOD's render taken "
+                       "apart into the terms of the model (ambient, diffuse, specular, emitted, reflected, "
+                       "transmitted) and their sum, the image. METHOD: raycast, whitted or raster:SHADING")
     sheet.add_argument("-q", "--quiet", action="store_true", help="no progress lines and no summary")
     sheet.set_defaults(run=run_sheet)
     return parser
@@ -423,6 +426,17 @@ def run_sheet(args: argparse.Namespace, started: float) -> int:
     scene = load_scene(args.scene)
     flags = ("width", "height", "spp", "threads")
     overrides = {key: getattr(args, key) for key in flags if getattr(args, key) is not None}
+    if args.terms is not None:
+        for flag, given in (("--methods", args.methods), ("--reference", args.reference), ("--diff", args.diff)):
+            if given:
+                raise LumosError(f"--terms takes one method apart; it does not combine with {flag}")
+        image, cells = sheet.make_terms_sheet(scene, args.terms, args.columns, progress=not args.quiet,
+                                              title=Path(args.scene).name, **overrides)
+        sheet.save_sheet(image, out)
+        if not args.quiet:
+            print(f"lumos: terms of {args.terms} ({cells[0]['width']}x{cells[0]['height']}), "
+                  f"{time.perf_counter() - started:.2f} s -> {out}", file=sys.stderr)
+        return 0
     image, cells = sheet.make_sheet(scene, entries, args.columns, progress=not args.quiet,
                                     title=Path(args.scene).name, reference=args.reference, diff=args.diff,
                                     **overrides)

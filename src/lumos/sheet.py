@@ -67,9 +67,10 @@ RASTER_SHADINGS = (("flat", "flat"), ("Gouraud", "gouraud"), ("Phong", "phong"))
 #: Samples per pixel of the path tracer's cell at least, unless the sheet is given an spp.
 PATH_MIN_SPP = 64
 #: Samples per pixel of the supersampling that stands in for whitted's adaptive anti-aliasing in the other
-#: methods' cells (adaptive_depth 3 spends 1 ray per pixel on flat areas and up to 64 on edges; 4 jittered
-#: samples per pixel is about its cost on the Whitted examples), unless the sheet is given an spp.
-ADAPTIVE_STAND_IN_SPP = 4
+#: methods' cells, unless the sheet is given an spp (`api.ADAPTIVE_STAND_IN_SPP`).
+ADAPTIVE_STAND_IN_SPP = api.ADAPTIVE_STAND_IN_SPP
+#: Bounces of whitted's cell when the scene asks for unbounded depth (max_depth: -1, a path-tracing setting).
+WHITTED_STAND_IN_DEPTH = 5
 #: Colour of a cell a method could not render, and of its text.
 FAILED, FAILED_INK = (242, 242, 242), (150, 40, 40)
 #: The error shown white in the difference images, in units of the display's white (linear radiance times
@@ -233,6 +234,46 @@ def make_sheet(scene, entries: Optional[list[tuple[str, dict]]] = None, columns:
     return sheet, cells
 
 
+def make_terms_sheet(scene, method: str = "whitted", columns: Optional[int] = None, progress: bool = False, *,
+                     title: Optional[str] = None, max_cell_width: Optional[int] = MAX_CELL_WIDTH, **settings):
+    """One method's render taken apart: its term AOVs (ambient, diffuse, specular, emitted, reflected,
+    transmitted) side by side, then their sum, the image. `method` is `METHOD` or `raster:SHADING`
+    (`parse_reference`'s syntax); it must be raycast, raster or whitted, the methods that compute the terms.
+    Returns `(sheet, cells)` as `make_sheet` (each cell's image is one term, on the render's exposure)."""
+    from .image import Image
+    from .scene.loader import load_scene
+    from .scene.model import TERM_AOVS
+
+    title = _title_of(scene) if title is None else title
+    scene = load_scene(scene)
+    name, shading = parse_reference(method)
+    if name not in ("raycast", "raster", "whitted"):
+        raise LumosError(f"--terms: method {name} does not compute the classic model's terms (raycast, raster "
+                         "and whitted do)")
+    entry = {"method": name, "aov": list(TERM_AOVS)}
+    if shading is not None:
+        entry["shading"] = shading
+    label = name if name != "raster" else f"raster · {shading or settings.get('shading') or scene.render.shading}"
+    jobs = _jobs(scene, [(label, entry)], settings, max_cell_width)
+    label, job = jobs[0]
+    api.resolve_settings(scene, job)
+    say = _say if progress else (lambda text: None)
+    img = api.render(scene, progress=progress, **job)
+    say(f"{label}: {img.width}x{img.height}, {format_seconds(img.stats['render_s'])}")
+    cells = []
+    for term in TERM_AOVS:
+        part = Image(np.ascontiguousarray(img.aovs[term], np.float32), exposure=img.exposure)
+        cells.append({"label": term, "method": name, "shading": shading, "width": img.width, "height": img.height,
+                      "render_s": None, "image": part, "error": None, "figures": None, "diff_box": None,
+                      "caption": f"max {float(img.aovs[term].max()):.3g}"})
+    cells.append({"label": "sum: the image", "method": name, "shading": shading, "width": img.width,
+                  "height": img.height, "render_s": float(img.stats["render_s"]), "image": img, "error": None,
+                  "figures": None, "diff_box": None})
+    info = f"{label} · {img.width}x{img.height} · its terms, which add up to the image"
+    sheet = compose_sheet(cells, columns or 4, title=title, info=info)
+    return sheet, cells
+
+
 def _render_cell(scene, entry: tuple[str, dict], cfg, progress: bool) -> dict:
     """Render one cell: its dict, with image and render_s, or error (one line) where the method cannot."""
     label, job = entry
@@ -289,6 +330,11 @@ def _jobs(scene, entries, settings: dict, max_cell_width: Optional[int]) -> list
                 if settings.get("spp") is None:
                     job["spp"] = max(scene.render.spp, ADAPTIVE_STAND_IN_SPP)
                 label = f"{label} · supersampled"
+            depth = settings.get("max_depth", scene.render.max_depth)
+            if job["method"] == "whitted" and depth is not None and depth < 0 and entry.get("max_depth") is None:
+                # unbounded depth is the path tracer's (roulette ends its paths); whitted takes its default
+                job["max_depth"] = WHITTED_STAND_IN_DEPTH
+                label = f"{label} · depth {WHITTED_STAND_IN_DEPTH}"
             if job["method"] == "path" and settings.get("spp") is None and scene.render.spp < PATH_MIN_SPP:
                 # a scene's spp is meant for anti-aliasing; a path tracer needs samples to show its light
                 job["spp"] = PATH_MIN_SPP
@@ -450,7 +496,8 @@ def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str =
             _wrapped(draw, "not rendered: " + cell.get("error", ""), fonts["time"], FAILED_INK, x, slot_y, w, h)
         draw.rectangle((x - 1, slot_y - 1, x + w, slot_y + h), outline=FRAME)
         y = slot_y + lay.cell_h + CAPTION_PAD
-        when = format_seconds(cell["render_s"]) if cell.get("render_s") is not None else "not rendered"
+        when = (format_seconds(cell["render_s"]) if cell.get("render_s") is not None
+                else cell.get("caption", "not rendered"))
         lines = [(cell["label"], fonts["label"], INK), (when, fonts["time"], MUTED)]
         if cell.get("reference"):
             lines.append(("reference", fonts["time"], INK))

@@ -344,7 +344,7 @@ def triangle_arrays(tri_verts: np.ndarray, tri_ids: np.ndarray) -> CompiledScene
     materials = _Materials()
     materials.emitter((0.0, 0.0, 0.0))
     lights = (np.zeros(0, np.int32), np.zeros(0, np.int32), np.zeros((0, 6, 3)), np.zeros((0, 5)))
-    stand_in = SimpleNamespace(ambient=(0.0, 0.0, 0.0), background=(0.0, 0.0, 0.0))
+    stand_in = SimpleNamespace(ambient=(0.0, 0.0, 0.0), background=(0.0, 0.0, 0.0), materials={}, objects=[])
     parts = [(np.asarray(tri_verts, np.float64), None, None, 0, np.asarray(tri_ids, np.int32))]
     return _assemble(stand_in, materials, _Shapes(), parts, lights, [])
 

@@ -190,7 +190,7 @@ def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, see
     """The classic model with the coefficients given as (r, g, b) tuples (a textured surface's vary per point):
     the sum of `illuminate_terms`. Returns ((r, g, b), shadow rays traced)."""
     a, d, s, rays = illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample,
-                                     shadows, stack, stack_t, time, lit.light_vecs, -1)
+                                     shadows, stack, stack_t, time, lit.light_scalars, -1)
     return (a[0] + d[0] + s[0], a[1] + d[1] + s[1], a[2] + d[2] + s[2]), rays
 
 

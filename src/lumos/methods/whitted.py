@@ -343,7 +343,6 @@ def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
         tsum = np.zeros(18)
         rays = 0
         for x in range(width):
-            pixel = y * width + x
             rgb, n = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
                                   max_depth, scratch, sa.background, depth, normal, albedo, object_id, tsum,
                                   want_terms)
