@@ -73,17 +73,17 @@ T_AMBIENT, T_DIFFUSE, T_SPECULAR, T_EMITTED, T_REFLECTED, T_TRANSMITTED = 0, 3, 
 
 
 @njit_alloc
-def _scratch(max_depth, log_rows=0, n_lights=0):
+def _scratch(max_depth, log_rows=0, n_lights=0, terms=False):
     """Per-thread work arrays for `trace`: the ray stack (origin, direction, weight; depth, media count, branch,
     log row of the ray that spawned it; media objects and indices of refraction), the BVH traversal stack,
-    the sample's terms (18: see T_*), and the ray-tree log (`log_rows` rows, none by default; its count is −1
+    the sample's terms (18: see T_*; `terms` False: none kept, an empty array), and the ray-tree log (`log_rows` rows, none by default; its count is −1
     when logging is off) with each logged hit's per-light shares (`illuminate_terms`' per_light, for
     `n_lights` lights)."""
     size = 2 * max_depth + 4  # depth-first: at most one pending sibling per level, plus the ray in hand
     log_n = np.full(1, -1 if log_rows == 0 else 0, np.int64)
     return (np.empty((size, 9)), np.empty((size, 4), np.int64), np.empty((size, MAX_MEDIA), np.int64),
             np.empty((size, MAX_MEDIA)), np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK),
-            np.zeros(18), np.zeros((max(log_rows, 1), LOG_COLS)), log_n,
+            np.zeros(18 if terms else 0), np.zeros((max(log_rows, 1), LOG_COLS)), log_n,
             np.zeros((max(log_rows, 1) * max(n_lights, 1), PER_LIGHT_SIZE)), np.int64(max(n_lights, 1)))
 
 
@@ -140,7 +140,8 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
     one row per ray in scratch[7] (LOG_*)."""
     st_f, st_i, st_mo, st_mi, stack, stack_t, tacc, log, log_n, light_log, light_stride = scratch
     logging = log_n[0] >= 0
-    for k in range(18):  # element by element: device code makes no array views (kernels.jit)
+    keep_terms = tacc.shape[0] > 0
+    for k in range(tacc.shape[0]):  # element by element: device code makes no array views (kernels.jit)
         tacc[k] = 0.0
     r = g = b = 0.0
     rays = 0
@@ -193,7 +194,8 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
             r += w0 * background[0]
             g += w1 * background[1]
             b += w2 * background[2]
-            _add_term(tacc, T_EMITTED if depth == 0 else k_light, w0, w1, w2, background)
+            if keep_terms:
+                _add_term(tacc, T_EMITTED if depth == 0 else k_light, w0, w1, w2, background)
             if row >= 0:
                 _log3(log, row, LOG_BACKGROUND, background)
             continue
@@ -222,7 +224,9 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         r += w0 * (e[0] + la[0] + ld[0] + ls[0])
         g += w1 * (e[1] + la[1] + ld[1] + ls[1])
         b += w2 * (e[2] + la[2] + ld[2] + ls[2])
-        if depth == 0:
+        if not keep_terms:
+            pass
+        elif depth == 0:
             _add_term(tacc, T_EMITTED, 1.0, 1.0, 1.0, e)
             _add_term(tacc, T_AMBIENT, 1.0, 1.0, 1.0, la)
             _add_term(tacc, T_DIFFUSE, 1.0, 1.0, 1.0, ld)
@@ -339,7 +343,7 @@ def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
     `want_terms`, the mean of the samples' terms in terms[y, x, :18]."""
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        scratch = _scratch(max_depth)
+        scratch = _scratch(max_depth, 0, 0, want_terms)
         tsum = np.zeros(18)
         rays = 0
         for x in range(width):
@@ -410,7 +414,7 @@ def _corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed
     radiance in corners[y, x, 0:3] and, when corners has 21 channels, its terms after it."""
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        scratch = _scratch(max_depth)
+        scratch = _scratch(max_depth, 0, 0, corners.shape[2] > 3)
         rays = 0
         for x in range(width + 1):
             key = y * (width + 1) + x
@@ -433,7 +437,7 @@ def _adaptive_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, se
     channels = corners.shape[2]
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        scratch = _scratch(max_depth)
+        scratch = _scratch(max_depth, 0, 0, channels > 3)
         grid = np.empty((n, n, channels))
         stamp = np.full((n, n), -1, np.int64)
         weights = np.zeros((1, 1))
