@@ -140,3 +140,16 @@ def test_cli_explain_text_json_and_errors(capsys):
     assert err.count("\n") == 1 and "outside the image" in err
     assert cli.main(["explain", CLASSIC, "--pixel", "1", "1", "--method", "path"]) == 2
     assert "cannot explain" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("method, settings", [("raycast", {}), ("raster", {"shading": "gouraud"}),
+                                              ("raster", {"shading": "phong"})])
+def test_raycast_and_raster_explain_pixels_of_the_classic_example(method, settings):
+    # the scene asks for whitted's adaptive anti-aliasing: the other methods supersample at 4 spp instead
+    settings = dict(SMALL, method=method, **settings)
+    with pytest.warns(lumos.LumosWarning, match="supersamples"):
+        img = lumos.render(CLASSIC, **settings)
+    for x, y in (THROUGH_GLASS, ON_BOARD):
+        with pytest.warns(lumos.LumosWarning, match="supersamples"):
+            tree = lumos.explain(CLASSIC, x, y, **settings)
+        assert np.allclose(tree["value"], img.array[y, x], atol=1e-5), (method, x, y)

@@ -374,3 +374,15 @@ def test_thin_lens_and_motion_blur_agree_with_whitted():
     var = p.aovs["variance"] + 0.25 * (runs[0] - runs[1]) ** 2
     z = np.abs(_block_means(p.array - wt)) / np.maximum(np.sqrt(_block_means(var) / 64), 1e-6)
     assert z.max() < 5.0, z.max()
+
+
+def test_direct_and_indirect_aovs_split_the_image_where_max_depth_zero_does():
+    # direct is what max_depth 0 gathers, sample for sample (the first vertices draw the same random numbers);
+    # indirect is the rest, and the two add up to the raw image
+    scene = "examples/path/cornell.yaml"
+    full = lumos.render(scene, method="path", width=48, height=48, spp=8, aov=["direct", "indirect"])
+    zero = lumos.render(scene, method="path", width=48, height=48, spp=8, max_depth=0, aov=["direct", "indirect"])
+    assert np.allclose(full.aovs["direct"] + full.aovs["indirect"], full.array, atol=1e-5)
+    assert np.allclose(full.aovs["direct"], zero.array, atol=1e-5)
+    assert np.allclose(zero.aovs["indirect"], 0.0, atol=1e-6)
+    assert full.aovs["indirect"].mean() > 0.2 * full.aovs["direct"].mean()  # colour bleeding and fill light

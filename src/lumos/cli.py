@@ -130,7 +130,8 @@ def _render_flags(render: argparse.ArgumentParser) -> None:
                         help="also write these buffers beside OUT: depth, normal, albedo, object_id, samples; "
                         "raycast, raster and whitted also the terms of the model, which add up to the image: "
                         "ambient, diffuse, specular, emitted, reflected, transmitted; path also variance (of each "
-                        "pixel's mean) and noisy (the image before --denoise)")
+                        "pixel's mean), noisy (the image before --denoise), direct (what --max-depth 0 gathers) and "
+                        "indirect (the rest)")
     ras = render.add_argument_group("scan-line rendering (--method raster)")
     ras.add_argument("--no-mipmap", dest="mipmap", action="store_const", const=False, help="look textures up at "
                      "each pixel's centre instead of filtering them over its footprint (mip-mapping): shows the "

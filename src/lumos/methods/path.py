@@ -159,8 +159,9 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
 
     Random numbers: `_draw2(sampler, pixel_key, spp, sample, key, pair, dim)` (see there). Returns (rgb, rays
     traced, t and object id of the first hit (t = −1 on a miss), albedo and shading normal of the first hit (the
-    denoiser's guides), and the emission of the first hit itself (the light seen directly, which the denoiser
-    leaves alone))."""
+    denoiser's guides), the emission of the first hit itself (the light seen directly, which the denoiser
+    leaves alone), and the direct light: the part of rgb that `max_depth: 0` gathers — the emission (and
+    background) found at vertices 0 and 1 and the light sampled at vertex 0 — which the `direct` AOV holds)."""
     stack, stack_t, media_obj, media_ior = scratch
     L0 = L1 = L2 = 0.0
     b0 = b1 = b2 = 1.0  # throughput
@@ -175,6 +176,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
     albedo = (0.0, 0.0, 0.0)
     normal = (0.0, 0.0, 0.0)
     e0 = e1 = e2 = 0.0  # the emission of the first hit itself
+    D0 = D1 = D2 = 0.0  # the direct light: what max_depth 0 gathers (vertices 0 and 1's emission, NEE at 0)
     depth = 0
     while True:
         # stage 1: the nearest surface along the ray
@@ -185,6 +187,8 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
             L0 += b0 * background[0]
             L1 += b1 * background[1]
             L2 += b2 * background[2]
+            if depth <= 1:
+                D0, D1, D2 = D0 + b0 * background[0], D1 + b1 * background[1], D2 + b2 * background[2]
             break
         ref = hit[1]
         p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, o, d, t, ref, hit[2], hit[3], hit[4], time)
@@ -205,6 +209,8 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
             L0 += b0 * le0 * w
             L1 += b1 * le1 * w
             L2 += b2 * le2 * w
+            if depth <= 1:
+                D0, D1, D2 = D0 + b0 * le0 * w, D1 + b1 * le1 * w, D2 + b2 * le2 * w
             if depth == 0:
                 e0, e1, e2 = le0 * w, le1 * w, le2 * w
         if depth == 0:
@@ -250,6 +256,8 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
                             L0 += b0 * c0 * w
                             L1 += b1 * c1 * w
                             L2 += b2 * c2 * w
+                            if depth == 0:
+                                D0, D1, D2 = D0 + c0 * w, D1 + c1 * w, D2 + c2 * w
         # stage 5: BSDF sampling: the direction the path goes on in, and its weight f·cos/pdf
         u1, u2 = _draw2(sampler, pixel_key, spp, sample, key, pair + 1, dim + 2)
         p_smooth = p_d + p_s
@@ -298,7 +306,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
         prev_p = p
         o = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
         d = wi
-    return (L0, L1, L2), rays, first_t, first_obj, albedo, normal, (e0, e1, e2)
+    return (L0, L1, L2), rays, first_t, first_obj, albedo, normal, (e0, e1, e2), (D0, D1, D2)
 
 
 @njit_inline
@@ -328,8 +336,8 @@ def _pixel_point(filter_kind, u1, u2, x, y):
 def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, spp, seed, max_depth, mode,
                sampler, filter_kind, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row):
     """Samples s0 … s1−1 of every pixel of rows y0 … y1−1, added (in sample order) to the float64 buffers:
-    sums and sums2 (H, W, 3) of radiance and its square, guides (H, W, 9) of albedo, normal and the first hit's
-    own emission; depth and
+    sums and sums2 (H, W, 3) of radiance and its square, guides (H, W, 12) of albedo, normal, the first hit's
+    own emission and the direct light; depth and
     object_id from sample 0."""
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
@@ -350,13 +358,14 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
                 tau = cam_time[0]
                 if cam_time[1] > cam_time[0]:
                     tau = cam_time[0] + (cam_time[1] - cam_time[0]) * rand_key(key, DIM_TIME)
-                rgb, n, t, obj, alb, nrm, emits = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth, mode, sampler,
+                rgb, n, t, obj, alb, nrm, emits, direct = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth, mode, sampler,
                                                       pixel_key, spp, s, key, scratch, sa.background)
                 rays += n
                 r, g, b = rgb
                 if not (math.isfinite(r) and math.isfinite(g) and math.isfinite(b)):
                     bad += 1  # a sample that divided by a vanishing pdf: dropped, never on the film
                     r = g = b = 0.0
+                    direct = (0.0, 0.0, 0.0)
                 sums[y, x, 0] += r
                 sums[y, x, 1] += g
                 sums[y, x, 2] += b
@@ -369,6 +378,8 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
                 if math.isfinite(emits[0] + emits[1] + emits[2]):
                     for c in range(3):
                         guides[y, x, 6 + c] += emits[c]
+                for c in range(3):
+                    guides[y, x, 9 + c] += direct[c]
                 if s == 0 and t >= 0.0:
                     depth[y, x] = t
                     object_id[y, x] = obj
@@ -420,7 +431,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
     seed = np.int64(settings.seed)
     sums = np.zeros((height, width, 3))
     sums2 = np.zeros((height, width, 3))
-    guides = np.zeros((height, width, 9))
+    guides = np.zeros((height, width, 12))
     depth = np.full((height, width), np.inf, np.float32)
     object_id = np.full((height, width), -1, np.int32)
     rays_per_row = np.zeros(height, np.int64)
@@ -482,8 +493,10 @@ def _film(sums, sums2, guides, depth, object_id, n, settings, threads, rays_per_
         variance = np.maximum(sums2 - sums * sums / n, 0.0) / (n * (n - 1.0))
     else:
         variance = np.zeros_like(sums)
+    direct = (guides[:, :, 9:12] / n).astype(np.float32)
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
-                "samples": np.full(depth.shape, n, np.int32), "variance": variance.astype(np.float32), "noisy": mean}
+                "samples": np.full(depth.shape, n, np.int32), "variance": variance.astype(np.float32), "noisy": mean,
+                "direct": direct, "indirect": mean - direct}
     aovs = {name: all_aovs[name] for name in settings.aov}
     extra = {"spp": int(n), "passes": int(passes), "stopped": stopped,
              "discarded_samples": int(bad_per_row.sum())}

@@ -159,7 +159,8 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
             V = _toward_eye(p, cam_vecs, ortho)
             n = (normals[i, 0], normals[i, 1], normals[i, 2])
             mat = lit.materials[materials_of[i]]
-            ka, kd, ks, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frames[i], _NO_FOOTPRINT)
+            frame = frames[i if i < frames.shape[0] else 0]  # one row of zeros when the scene has no textures
+            ka, kd, ks, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frame, _NO_FOOTPRINT)
             if not gouraud:
                 n_f = _facing(n, V)
                 n_s = _facing(n_b, n_f)
@@ -359,7 +360,7 @@ class RasterFrame:
         # vertex stage: the attributes the rasterizer interpolates (and, for Gouraud, the light at each vertex)
         nv = len(mesh.positions)
         textured = sa.tex_info.shape[0] > 0
-        self.frames = mesh.uv_frames() if textured else np.zeros((mesh.n_prims, 12))
+        self.frames = mesh.uv_frames() if textured else np.zeros((1, 12))  # read only where a material is textured
         self.uv_at = G_UV if textured else -1
         self.light_at = G_UV + 2 if textured else G_UV
         k = self.light_at + (12 if self.shading == GOURAUD else 0)
@@ -374,7 +375,8 @@ class RasterFrame:
             vert_material[mesh.prim_index] = np.repeat(mesh.prim_info[:, 0], np.diff(mesh.prim_start))
             light = np.zeros((nv, 12))
             counts = np.zeros(-(-nv // _CHUNK), np.int64)
-            _light_points(sa, mesh.positions, mesh.normals, mesh.uvs, _vertex_frames(mesh, self.frames),
+            _light_points(sa, mesh.positions, mesh.normals, mesh.uvs,
+                          _vertex_frames(mesh, self.frames) if textured else self.frames,
                           vert_material, self.cam_vecs, self.ortho, self.seed, self.shadows, True, light, counts)
             attrs[:, self.light_at:self.light_at + 12] = light
             self.rays += int(counts.sum())

@@ -81,11 +81,12 @@ class Camera(StrictModel):
 # ------------------------------------------------------------------------------------------ render settings
 
 AOV_NAMES = ("depth", "normal", "albedo", "object_id", "samples", "variance", "noisy", "ambient", "diffuse",
-             "specular", "emitted", "reflected", "transmitted")
+             "specular", "emitted", "reflected", "transmitted", "direct", "indirect")
 #: AOVs of the classic model's terms (raycast, raster, whitted): they add up to the image.
 TERM_AOVS = ("ambient", "diffuse", "specular", "emitted", "reflected", "transmitted")
-#: AOVs only the path tracer makes: the variance of each pixel's mean, and the image before denoising.
-PATH_AOVS = ("variance", "noisy")
+#: AOVs only the path tracer makes: the variance of each pixel's mean, the image before denoising, and the image
+#: split into its direct light (what max_depth 0 gathers) and the indirect rest.
+PATH_AOVS = ("variance", "noisy", "direct", "indirect")
 #: `max_depth` of each method when the scene and the flags leave it unset (None: unbounded, roulette ends paths).
 DEFAULT_MAX_DEPTH = {"whitted": 5, "path": None, "radiosity": 5}
 
@@ -135,7 +136,8 @@ class RenderSettings(StrictModel):
     exposure: Positive = 1.0
     threads: Optional[Annotated[int, Field(ge=1, le=1024)]] = None
     aov: list[Literal["depth", "normal", "albedo", "object_id", "samples", "variance", "noisy", "ambient", "diffuse",
-                      "specular", "emitted", "reflected", "transmitted"]] = Field(default_factory=list)
+                      "specular", "emitted", "reflected", "transmitted", "direct", "indirect"]] = Field(
+        default_factory=list)
     # anti-aliasing of the ray methods: `spp` jittered samples (supersample) or the classic adaptive method
     antialias: Literal["none", "supersample", "adaptive"] = "supersample"
     adaptive_threshold: Positive = 0.03
