@@ -495,3 +495,23 @@ def test_render_counts_the_solve_s_rays_and_takes_the_threads_asked_for():
     assert numba.get_num_threads() == 1
     assert img.stats["rays"] >= img.stats["radiosity"]["rays"] > 0
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+
+
+def test_a_textured_material_takes_part_with_its_textures_mean_colour():
+    import warnings as _w
+
+    import lumos as _lumos
+    from lumos.api import resolve_settings as _resolve
+    from lumos.compile import compile_scene as _compile
+
+    scene = _lumos.load_scene({
+        "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
+        "lights": [{"type": "point", "position": [0, 2, 4]}],
+        "objects": [{"type": "sphere", "radius": 1, "material": {
+            "kd": 0.1, "texture": {"type": "checker", "colors": [[0.8, 0.0, 0.0], [0.0, 0.0, 0.6]],
+                                   "apply_to": ["kd"]}}}]})
+    with _w.catch_warnings(record=True) as caught:
+        _w.simplefilter("always")
+        patches = _compile(scene, _resolve(scene, dict(method="radiosity"))).patches
+    assert any("mean colour" in str(w.message) for w in caught)
+    assert np.allclose(patches.reflectance, [0.4, 0.0, 0.3])

@@ -92,6 +92,16 @@ class _Table:
         return np.ascontiguousarray(info), np.ascontiguousarray(pixels, dtype=np.float32)
 
 
+def texture_mean(tex) -> np.ndarray:
+    """The mean linear colour of a texture over its uv square (float64 (3,)): of an image's texels, or the two
+    colours' mean for checker, stripes and noise (half the area each; the noise is symmetric about 0.5). For
+    methods that cannot look a texture up per point (radiosity's patches)."""
+    if tex.type == "image":
+        path = tex._path if tex._path is not None else Path(tex.file).expanduser().resolve()
+        return load_texels(path).reshape(-1, 3).astype(np.float64).mean(axis=0)
+    return 0.5 * (np.asarray(tex.colors[0], np.float64) + np.asarray(tex.colors[1], np.float64))
+
+
 def mip_levels(texels: np.ndarray) -> list[np.ndarray]:
     """The mip-map pyramid of (H, W, 3) texels, level 0 first: each next level max(1, w // 2) × max(1, h // 2),
     every texel the area-weighted mean of the texels of the level above that its footprint covers (a box

@@ -22,8 +22,8 @@ sides; `side_patch` maps each polygon's front (the side its normal points to) an
 
 **Materials, read as radiosity reads them.** ρ = kd (scaled down, as the path tracer does, when kd + ks + kr +
 kt exceeds 1); ks, kr and kt take no part in the diffuse solution (the display traces mirrors and glass in a
-second pass); emission is emitted on every side that is a patch. Textures are not read: a textured material
-takes part with its own kd (a warning says so).
+second pass); emission is emitted on every side that is a patch. Textures are not looked up per point: a
+textured material takes part with its texture's mean colour where it applies (a warning says so).
 """
 
 from __future__ import annotations
@@ -262,6 +262,7 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     from ..compile.meshprep import prepare_mesh
     from ..compile.shapes import canonical, frame
     from ..compile.tessellate import tessellate_shape
+    from ..compile.textures import texture_mean
     from ..errors import LumosWarning
 
     lo, hi = usable_bounds(bounds)
@@ -280,12 +281,17 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
         key = id(mat)
         if key not in mat_index:
             mat_index[key] = len(mat_index)
-        if mat.texture is not None and key not in textured:
-            textured.add(key)
-            warnings.warn("radiosity does not read textures: a textured material takes part with its kd",
-                          LumosWarning, stacklevel=3)
-        kd = np.asarray(mat.kd, np.float64)
-        total = kd + np.asarray(mat.ks) + np.asarray(mat.kr) + np.asarray(mat.kt)
+        kd, ks, kr = (np.asarray(c, np.float64) for c in (mat.kd, mat.ks, mat.kr))
+        if mat.texture is not None:  # a patch takes the texture's mean colour where the texture applies
+            mean = texture_mean(mat.texture)
+            kd = mean if "kd" in mat.texture.apply_to else kd
+            ks = mean if "ks" in mat.texture.apply_to else ks
+            kr = mean if "kr" in mat.texture.apply_to else kr
+            if key not in textured:
+                textured.add(key)
+                warnings.warn("radiosity does not look textures up per point: a textured material takes part with "
+                              "its texture's mean colour", LumosWarning, stacklevel=3)
+        total = kd + ks + kr + np.asarray(mat.kt)
         if total.max() > 1.0:
             kd = kd / total.max()
         return mat_index[key], kd, np.asarray(mat.emission, np.float64)
