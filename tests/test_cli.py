@@ -235,3 +235,22 @@ def test_a_scene_with_adaptive_antialiasing_renders_with_another_method(tmp_path
     assert out.exists()
     # given as a flag, adaptive with another method is still refused
     assert cli.main(["render", str(scene), "--method", "raster", "--antialias", "adaptive", "-o", str(out)]) == 2
+
+
+@pytest.mark.parametrize("method", ["raster", "radiosity"])
+@pytest.mark.parametrize("scene", [
+    "objects: [{type: sphere, radius: 1.0e-300}]",
+    "objects: [{type: sphere, radius: 1}]\n"
+    "lights: [{type: area, shape: sphere, center: [0, 3, 0], radius: 1.0e-300}]",
+    "objects: [{type: plane, point: [0, 0, 0], normal: [0, 1, 0], transform: {scale: [1.0e-300, 1, 1]}}]",
+    "objects: [{type: csg, op: union, left: {type: sphere, radius: 1.0e-300}, right: {type: sphere, radius: 1}}]",
+])
+def test_shapes_too_small_to_tessellate_are_one_line_errors(tmp_path, capsys, method, scene):
+    path = tmp_path / "s.yaml"
+    path.write_text(scene + "\n")
+    out = tmp_path / "o.png"
+    assert cli.main(["render", str(path), "--method", method, "-o", str(out), "-q", "--width", "16",
+                     "--height", "12"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("lumos: error: ") and "bug" not in err
+    assert not out.exists()

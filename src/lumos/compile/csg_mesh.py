@@ -4,7 +4,7 @@
     piece.vertices (n, 3)  piece.normals (n, 3)  piece.uvs (n, 2)  piece.faces (m, 3)  piece.groups (m,)
     piece.material (the scene Material of the solid the faces came from)
 
-Each solid (leaf) is meshed in world space: spheres, boxes, cylinders and cones by `tessellate.tessellate_shape`
+Each solid (leaf) is meshed in world space: spheres, boxes, cylinders and cones by `tessellate.tessellate_object`
 at `segments` (with their exact normals and uvs), closed meshes by `meshprep.prepare_mesh` (faceted when they
 have no normals). The leaves are combined along the csg tree by manifold3d (the Python binding of Emmett
 Lalish's Manifold library, github.com/elalish/manifold, whose booleans return closed 2-manifolds), each
@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import LumosError
 from .meshprep import facet, prepare_mesh
 from .shapes import canonical
-from .tessellate import tessellate_shape
+from .tessellate import tessellate_object
 
 #: Property channels of a leaf's vertices: position, normal, uv.
 _POS, _NRM, _UV = slice(0, 3), slice(3, 6), slice(6, 8)
@@ -134,7 +134,7 @@ def _leaf(obj, world_from_object, segments, where, original_id) -> manifold3d.Ma
     else:
         kind, object_from_canonical = canonical(obj)
         m = object_from_canonical if world_from_object is None else world_from_object @ object_from_canonical
-        t = tessellate_shape(kind, m, segments, True)  # csg solids are capped (the scene model checks)
+        t = tessellate_object(kind, m, segments, True, where, "solid")  # csg solids are capped (the model checks)
         verts, normals, uvs, faces, groups = t.vertices, t.normals, t.uvs, t.faces, t.groups
     solid = _manifold(verts, normals, uvs, faces, groups, original_id)
     status = solid.status()

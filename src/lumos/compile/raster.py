@@ -19,7 +19,7 @@ from ..kernels import layout as L
 from .csg_mesh import csg_pieces
 from .meshprep import facet, prepare_mesh
 from .shapes import canonical
-from .tessellate import tessellate_plane, tessellate_shape
+from .tessellate import tessellate_object, tessellate_plane
 
 
 @dataclass
@@ -159,7 +159,8 @@ def build_raster_mesh(scene, segments: int, object_materials: list, emitters: li
         w = m if world_from_object is None else world_from_object @ m
         if kind == L.SHAPE_PLANE:
             continue  # after the extent of everything else is known
-        parts.append(_tess_part(tessellate_shape(kind, w, segments, getattr(obj, "capped", True)), mat, object_id))
+        t = tessellate_object(kind, w, segments, getattr(obj, "capped", True), f"objects[{object_id}]")
+        parts.append(_tess_part(t, mat, object_id))
     pts = np.array(analytic_points)
     extent = max(float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))), 1.0)
     for object_id, obj in enumerate(scene.objects):
@@ -169,7 +170,7 @@ def build_raster_mesh(scene, segments: int, object_materials: list, emitters: li
             parts.append(_plane_part(w, cam, extent, segments, object_materials[object_id], object_id))
     n_objects = len(scene.objects)
     for kind, w, mat, light in emitters:
-        t = tessellate_shape(kind, w, segments, True)
+        t = tessellate_object(kind, w, segments, True, f"lights[{light}]", "light")
         parts.append(_tess_part(t, mat, n_objects + light, light))
     return _assemble(parts)
 

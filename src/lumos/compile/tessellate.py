@@ -65,6 +65,20 @@ class _Part:
 # ---------------------------------------------------------------------------------------------- public API
 
 
+def tessellate_object(kind: int, world_from_canonical: np.ndarray, segments: int, capped: bool, where: str,
+                      noun: str = "object") -> Tessellation:
+    """`tessellate_shape` for a scene's object (or light) at key path `where`: a shape whose placement cannot be
+    tessellated (a radius or scale so small that its transform is singular in float64, or not finite) is a
+    one-line `LumosError` naming it, not a ValueError."""
+    from ..errors import LumosError
+
+    try:
+        return tessellate_shape(kind, world_from_canonical, segments, capped)
+    except ValueError as exc:
+        raise LumosError(f"{where}: this {noun} cannot be turned into polygons ({exc}; is a radius, size or scale "
+                         "zero or far below 1e-100?)") from None
+
+
 def tessellate_shape(kind: int, world_from_canonical: np.ndarray, segments: int, capped: bool = True) -> Tessellation:
     """Triangle mesh of the canonical shape `kind` placed by `world_from_canonical` (4×4, affine).
 

@@ -261,7 +261,7 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     from ..compile.csg_mesh import csg_pieces
     from ..compile.meshprep import prepare_mesh
     from ..compile.shapes import canonical, frame
-    from ..compile.tessellate import tessellate_shape
+    from ..compile.tessellate import tessellate_object
     from ..compile.textures import texture_mean
     from ..errors import LumosWarning
 
@@ -350,8 +350,8 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
         else:
             capped = getattr(obj, "capped", True)
             closed = kind == L.SHAPE_SPHERE or (kind in (L.SHAPE_CYLINDER, L.SHAPE_CONE) and capped)
+            t = tessellate_object(kind, w, segments, capped, f"objects[{object_id}]")  # checks w first
             inner = not closed or clear or _points_inside_solid(kind, w, _viewpoints(scene, object_id))
-            t = tessellate_shape(kind, w, segments, capped)
             v, tris = _split_triangles(t.vertices, t.faces, patch_size)
             b.add(v, tris, True, inner, rho, le, object_id, mat, group, closed)
     # area lights: their emitting shapes, lit side only (the other side of a rect or disk blocks light)
@@ -373,12 +373,12 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
             m = np.eye(4)
             m[:3, :3] = np.column_stack([f[:, 0] * light.radius, f[:, 1] * light.radius, f[:, 2]])
             m[:3, 3] = light.center
-            t = tessellate_shape(L.SHAPE_DISK, m, segments)
+            t = tessellate_object(L.SHAPE_DISK, m, segments, True, f"lights[{i}]", "light")
         else:
             m = np.eye(4)
             m[:3, :3] *= light.radius
             m[:3, 3] = light.center
-            t = tessellate_shape(L.SHAPE_SPHERE, m, segments)
+            t = tessellate_object(L.SHAPE_SPHERE, m, segments, True, f"lights[{i}]", "light")
         v, tris = _split_triangles(t.vertices, t.faces, patch_size)
         b.add(v, tris, True, False, zero, le, n_objects + i, -1, group)
     return _assemble(b)

@@ -310,6 +310,8 @@ class Transform(StrictModel):
         s = self.scale if isinstance(self.scale, tuple) else (self.scale,) * 3
         if any(c == 0 for c in s):
             raise ValueError("scale must not be zero on any axis")
+        if any(not 1e-100 <= abs(c) <= 1e100 for c in s):  # beyond, products of three scales leave float64
+            raise ValueError(f"scale must be between 1e-100 and 1e100 in size on every axis, got {list(s)}")
         if self.matrix is not None:
             explicit = self.model_fields_set & {"translate", "rotate", "scale"}
             if explicit:
