@@ -72,7 +72,7 @@ def resolve_settings(scene: Scene, overrides: dict[str, Any]) -> RenderSettings:
         spp = settings.spp if overrides.get("spp") is not None else max(settings.spp, ADAPTIVE_STAND_IN_SPP)
         settings = settings.model_copy(update={"antialias": "supersample", "spp": spp})
         warnings.warn(LumosWarning(f"render.antialias: the scene's adaptive anti-aliasing is whitted's; "
-                                   f"{settings.method} supersamples at {spp} spp instead"), stacklevel=2)
+                                   f"{settings.method} supersamples at {spp} spp instead"))
     check_method_settings(settings)
     return settings
 

@@ -289,7 +289,8 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
             kr = mean if "kr" in mat.texture.apply_to else kr
             if key not in textured:
                 textured.add(key)
-                warnings.warn("radiosity does not look textures up per point: a textured material takes part with "
+                name = next((repr(k) for k, m in scene.materials.items() if m is mat), "an inline material")
+                warnings.warn(f"radiosity does not look textures up per point: material {name} takes part with "
                               "its texture's mean colour", LumosWarning, stacklevel=3)
         total = kd + ks + kr + np.asarray(mat.kt)
         if total.max() > 1.0:
