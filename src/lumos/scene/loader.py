@@ -594,9 +594,9 @@ def _quoted(text: str) -> list[str]:
 
 
 def _num(x: Any) -> str:
-    if isinstance(x, float) and x.is_integer():
+    if isinstance(x, float) and x.is_integer() and abs(x) < 1e15:
         return str(int(x))
-    return str(x)
+    return f"{x:g}" if isinstance(x, float) else str(x)
 
 
 def _show(value: Any, typed: bool = True) -> str:

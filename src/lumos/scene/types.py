@@ -43,7 +43,10 @@ Vec2 = Annotated[tuple[Finite, Finite], BeforeValidator(_list_to_tuple)]
 Vec3 = Annotated[tuple[Finite, Finite, Finite], BeforeValidator(_list_to_tuple)]
 Direction = Annotated[tuple[Finite, Finite, Finite], BeforeValidator(_list_to_tuple), AfterValidator(_nonzero)]
 #: Linear RGB, each channel >= 0; a scalar means grey.
-Color = Annotated[tuple[NonNegative, NonNegative, NonNegative], BeforeValidator(_scalar_to_rgb)]
+#: A colour channel (reflectance, intensity, radiance): at most 1e30, so that sums of lights times coefficients
+#: stay inside the float32 film (3.4e38) instead of turning into infinity
+Channel = Annotated[float, Field(ge=0, le=1e30, allow_inf_nan=False)]
+Color = Annotated[tuple[Channel, Channel, Channel], BeforeValidator(_scalar_to_rgb)]
 
 
 def norm(v) -> float:
