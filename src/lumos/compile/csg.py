@@ -21,6 +21,19 @@ from .shapes import canonical, world_bounds
 _OPS = {"union": CSG_UNION, "intersection": CSG_INTERSECTION, "difference": CSG_DIFFERENCE}
 
 
+def operands(obj, world_from_node, where: str):
+    """(child, world_from_child, key path) for the left and right operands of csg node `obj` placed by
+    world_from_node (None: the identity): each child's own transform composed after its node's, as every
+    method places csg solids (the ray methods' rows here, the scan-line renderer's booleans in `csg_mesh`)."""
+    for side in ("left", "right"):
+        child = getattr(obj, side)
+        world = world_from_node
+        if child.transform is not None:
+            m = child.transform.to_matrix()
+            world = m if world is None else world @ m
+        yield child, world, f"{where}.{side}"
+
+
 def add_csg(obj, object_id, world_from_object, scene, materials, shapes, tri_parts) -> int:
     """Add csg object `obj` (objects[object_id]) to `shapes`; returns the csg shape's index. `tri_parts` (the
     BVH's triangles) is left alone: a mesh solid's triangles must not be hit on their own."""
@@ -47,14 +60,8 @@ class _Builder:
     def node(self, obj, world_from_node, material, where):
         """(child reference, world bounds (6,)) of the csg node `obj` placed by world_from_node."""
         refs, boxes = [], []
-        for side in ("left", "right"):
-            child = getattr(obj, side)
-            world = world_from_node
-            if child.transform is not None:
-                m = child.transform.to_matrix()
-                world = m if world is None else world @ m
+        for child, world, at in operands(obj, world_from_node, where):
             mat = material if child.material is None else self.materials.add(self.scene.material_of(child))
-            at = f"{where}.{side}"
             ref, box = self.node(child, world, mat, at) if child.type == "csg" else self.leaf(child, world, mat, at)
             refs.append(ref)
             boxes.append(box)

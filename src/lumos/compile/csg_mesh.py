@@ -33,6 +33,7 @@ import manifold3d
 import numpy as np
 
 from ..errors import LumosError
+from .csg import operands
 from .meshprep import facet, prepare_mesh
 from .shapes import canonical
 from .tessellate import tessellate_object
@@ -105,14 +106,8 @@ def _count_leaves(obj) -> int:
 def _node(scene, obj, world_from_node, material, segments, where, leaves, first_id) -> manifold3d.Manifold:
     """The manifold of csg node `obj` placed by world_from_node; its leaves are appended to `leaves`."""
     sides = []
-    for side in ("left", "right"):
-        child = getattr(obj, side)
-        world = world_from_node
-        if child.transform is not None:
-            m = child.transform.to_matrix()
-            world = m if world is None else world @ m
+    for child, world, at in operands(obj, world_from_node, where):
         mat = material if child.material is None else scene.material_of(child)
-        at = f"{where}.{side}"
         if child.type == "csg":
             sides.append(_node(scene, child, world, mat, segments, at, leaves, first_id))
         else:
