@@ -34,24 +34,23 @@ benchmarks/bench_path.py does.
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
 
 import lumos
-from lumos import film
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # examples/: the figure scripts' shared kit
+from figure_kit import compose, png8, save_image, shown  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 OUT = ROOT / "docs" / "images" / "path"
 REFERENCE = ROOT / "tests" / "data" / "cornell_mitsuba" / "ref_depth8_256.npy"
 
-#: Caption lines under each panel, gap between panels, colours (white page, near-black text).
-LINE_H, GAP, FONT_SIZE = 18, 6, 14
-PAGE, INK = (255, 255, 255), (25, 25, 25)
 
 #: Set by main(): worker threads of every render, and the fraction of the samples (--quick: 1/16).
 THREADS: int | None = None
@@ -84,47 +83,12 @@ def render(scene, label: str, **settings) -> lumos.Image:
     return img
 
 
-def png8(linear: np.ndarray, exposure: float = 1.0) -> np.ndarray:
-    return film.to_png8(np.ascontiguousarray(linear, np.float32), exposure)
-
-
-def font():
-    try:
-        return ImageFont.load_default(size=FONT_SIZE)
-    except TypeError:  # Pillow < 10.1: the fixed bitmap font
-        return ImageFont.load_default()
-
-
-def compose(panels: list[tuple[str, np.ndarray]], columns: int) -> Image.Image:
-    """Panels (caption, uint8 image of one size) in a grid, each caption (lines split at '\\n') centred under
-    its panel."""
-    h, w = panels[0][1].shape[:2]
-    lines = max(caption.count("\n") + 1 for caption, _ in panels)
-    cap_h = lines * LINE_H + 8
-    rows = -(-len(panels) // columns)
-    page = Image.new("RGB", (columns * w + (columns - 1) * GAP, rows * (h + cap_h) + (rows - 1) * GAP), PAGE)
-    draw = ImageDraw.Draw(page)
-    f = font()
-    for i, (caption, pixels) in enumerate(panels):
-        row, col = divmod(i, columns)
-        x, y = col * (w + GAP), row * (h + cap_h + GAP)
-        page.paste(Image.fromarray(np.ascontiguousarray(pixels), mode="RGB"), (x, y))
-        for k, text in enumerate(caption.split("\n")):
-            tw = draw.textlength(text, font=f)
-            draw.text((x + (w - tw) / 2, y + h + 4 + k * LINE_H), text, fill=INK, font=f)
-    return page
-
-
-def save(page: Image.Image | np.ndarray, name: str) -> None:
-    if isinstance(page, np.ndarray):
-        page = Image.fromarray(page, mode="RGB")
-    path = OUT / name
-    page.save(path, optimize=True)
-    print(f"{_shown(path)}: {page.width}x{page.height}, {path.stat().st_size // 1024} KB", flush=True)
+def save(page, name: str) -> None:
+    save_image(page, OUT / name, ROOT)
 
 
 def _shown(path: Path) -> str:
-    return str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path)
+    return shown(path, ROOT)
 
 
 def measured(figure: str, what: str, value: str) -> None:

@@ -10,14 +10,18 @@ The orientation figure also checks its claim in numbers: it prints the centre pi
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
+from PIL import Image, ImageDraw
 
 import lumos
 from lumos import film
 from lumos.sheet import make_sheet, save_sheet
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # examples/: the figure scripts' shared kit
+from figure_kit import font  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE.parents[1] / "docs" / "images" / "raster"
@@ -40,20 +44,13 @@ def shot(scene, **settings) -> np.ndarray:
     return film.to_png8(img.array, img.exposure)
 
 
-def font():
-    try:
-        return ImageFont.load_default(size=FONT_SIZE)
-    except TypeError:  # Pillow < 10.1: the fixed bitmap font
-        return ImageFont.load_default()
-
-
 def compose(panels: list[tuple[str, np.ndarray]], columns: int) -> Image.Image:
     """Panels (caption, uint8 image of one size) in a grid, each with its caption centred under it."""
     h, w = panels[0][1].shape[:2]
     rows = -(-len(panels) // columns)
     page = Image.new("RGB", (columns * w + (columns - 1) * GAP, rows * (h + CAPTION_H) + (rows - 1) * GAP), PAGE)
     draw = ImageDraw.Draw(page)
-    f = font()
+    f = font(FONT_SIZE)
     for i, (caption, pixels) in enumerate(panels):
         row, col = divmod(i, columns)
         x, y = col * (w + GAP), row * (h + CAPTION_H + GAP)
