@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import LumosError
 from ..kernels import layout as L
-from .bvh import build, pack_nodes
+from .bvh import build, pack_nodes, wide_nodes
 from .meshprep import prepare_mesh
 from .raster import RasterMesh, build_raster_mesh
 from .shapes import canonical, frame, rect_canonical, world_bounds
@@ -290,6 +290,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
     node_box, node_link, order, depth = build(prim_bounds)
     build_s = time.perf_counter() - t0
     node_box, node_link = pack_nodes(node_box, node_link)
+    wide_box, wide_link = wide_nodes(node_box, node_link)
 
     # leaf order: triangles are permuted so that leaves read them contiguously
     is_tri = order < n_tri
@@ -315,6 +316,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
         prim_ref=prim_ref,
         node_box=node_box,
         node_link=node_link,
+        wide_nodes=wide_box,
+        wide_link=wide_link,
         unbounded=unbounded,
         materials=material_rows,
         light_kind=light_kind,

@@ -26,7 +26,6 @@ from .jit import njit, njit_inline
 from .layout import (
     EMIT_LIGHT,
     EMIT_PARTS,
-    EMIT_SHAPE,
     EMIT_SPHERE,
     EMIT_TRIANGLE,
     INFO_KIND,

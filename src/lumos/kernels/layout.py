@@ -89,6 +89,13 @@ CAM_SIZE = 5
 NODE_FIRST = 6
 NODE_COUNT = 7
 
+# The 4-wide tree that traversal walks (built from the binary one, `compile.bvh.wide_nodes`): 128 bytes per node,
+# on 64-byte boundaries. Float32 columns 0-23: six bound rows (min x, y, z, max x, y, z) of the four children's
+# values each, as `kernels.simd.box4_test` loads them; int32 columns WIDE_CHILD..+3: each child's wide node index
+# or first prim_ref entry; WIDE_COUNT..+3: its leaf primitive count (0: a wide node; -1: an empty slot).
+WIDE_CHILD = 24
+WIDE_COUNT = 28
+
 SceneArrays = namedtuple(
     "SceneArrays",
     [
@@ -102,6 +109,8 @@ SceneArrays = namedtuple(
         "prim_ref",  # int32 (np,): BVH leaf order -> triangle (>= 0) or ~shape (< 0)
         "node_box",  # float32 (nn, 8): min xyz, max xyz in columns 0-5 (columns 6-7 hold the link bits)
         "node_link",  # int32 (nn, 8): an int32 view of node_box; columns NODE_FIRST, NODE_COUNT
+        "wide_nodes",  # float32 (nw, 32): the 4-wide tree, see WIDE_*
+        "wide_link",  # int32 (nw, 32): an int32 view of wide_nodes
         "unbounded",  # int32 (nu,): shapes tested outside the BVH
         "materials",  # float64 (nm, MAT_SIZE)
         "light_kind",  # int32 (nl,)
@@ -124,7 +133,8 @@ SceneArrays = namedtuple(
 #: What traversal needs (closest_hit, any_hit).
 Geometry = namedtuple(
     "Geometry",
-    ["node_box", "node_link", "prim_ref", "tri_verts", "shape_xform", "shape_info", "unbounded", "csg_nodes"],
+    ["node_box", "node_link", "prim_ref", "tri_verts", "shape_xform", "shape_info", "unbounded", "csg_nodes",
+     "wide_nodes", "wide_link"],
 )
 #: What turns a hit into a surface (surface_at).
 Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_info", "shape_xform", "shape_info"])

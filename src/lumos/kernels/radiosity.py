@@ -22,7 +22,7 @@ from .camera import camera_ray
 from .illumination import sample_light
 from .optics import reflect, refract, schlick
 from .jit import njit, njit_alloc, njit_inline, njit_parallel, prange
-from .layout import INFO_OBJECT, LIGHT_DIRECTIONAL, LV_DIFFUSE
+from .layout import LIGHT_DIRECTIONAL, LV_DIFFUSE
 from .rng import rand2_key, rand_key, sample_key
 from .sampling import stratified_2d
 from .surface import offset_origin
