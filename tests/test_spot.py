@@ -151,6 +151,51 @@ def test_outside_a_hard_edged_spot_only_the_ambient_term_is_left(method, extra):
     assert np.all(img[1, inside, 0] > 0.1 + 0.5)
 
 
+# -------------------------------------------------------------------------------------- naive twins
+
+TWIN_SCENE = {  # spheres, a box and a floor under a soft tilted spot, a hard-edged spot and a point light
+    "camera": {"position": [1.0, 3.0, 7.0], "look_at": [0.2, 0.3, 0.0], "fov": 50.0},
+    "ambient": 0.1,
+    "lights": [
+        {"type": "spot", "position": [-2.0, 4.0, 2.0], "direction": [0.5, -1.0, -0.4], "angle": 35.0,
+         "inner_angle": 12.0, "intensity": [14.0, 12.0, 10.0], "attenuation": [0.2, 0.0, 1.0]},
+        {"type": "spot", "position": [2.5, 3.0, 1.5], "direction": [-0.6, -1.0, -0.3], "angle": 20.0,
+         "inner_angle": 20.0, "diffuse": [0.1, 0.3, 0.6], "specular": 0.8},
+        {"type": "point", "position": [0.0, 5.0, -4.0], "intensity": 0.2},
+    ],
+    "objects": [
+        {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0], "material": {"ka": 0.3, "kd": 0.6}},
+        {"type": "sphere", "center": [-0.5, 0.8, 0.0], "radius": 0.8,
+         "material": {"ka": 0.2, "kd": [0.7, 0.3, 0.2], "ks": 0.6, "shininess": 40}},
+        {"type": "box", "min": [0.6, 0.0, -1.2], "max": [1.6, 1.0, -0.2], "material": {"ka": 0.2, "kd": 0.5}},
+    ],
+}
+
+
+def test_raycast_matches_the_naive_twin_with_spot_lights():
+    from naive import render_classic
+
+    w, h = 160, 120
+    img = lumos.render(TWIN_SCENE, method="raycast", width=w, height=h, antialias="none").array
+    want, _, _ = render_classic(TWIN_SCENE, w, h)
+    err = np.abs(img - want).max(axis=2)
+    assert (err <= 2e-3).mean() >= 0.99 and np.median(err) < 1e-5, (np.median(err), err.max())
+    lit_by_spots = want.max(axis=2) > 0.5
+    assert 0.05 < lit_by_spots.mean() < 0.8
+
+
+def test_whitted_matches_the_naive_twin_with_spot_shadows():
+    from naive import render_whitted
+
+    w, h = 160, 120
+    img = lumos.render(TWIN_SCENE, method="whitted", width=w, height=h, antialias="none", max_depth=0).array
+    want = render_whitted(TWIN_SCENE, w, h, max_depth=0)
+    err = np.abs(img - want).max(axis=2)
+    assert (err <= 3e-3).mean() >= 0.98 and np.median(err) < 1e-4, (np.median(err), err.max())
+    cast = lumos.render(TWIN_SCENE, method="raycast", width=w, height=h, antialias="none").array
+    assert (np.abs(cast - want).max(axis=2) > 0.05).mean() > 0.02  # the spots' shadows are in the picture
+
+
 # --------------------------------------------------------------------------------- across the methods
 
 FLOOR = {  # a spot-lit diffuse floor (nothing else: no shadows, no light between surfaces)
