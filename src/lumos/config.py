@@ -16,3 +16,6 @@ BVH_STACK = 192
 MAX_PIXELS = 16384 * 16384
 DEFAULT_WIDTH = 640
 DEFAULT_HEIGHT = 480
+#: A spot light whose cos(inner_angle) − cos(angle) is below this has a hard edge: full light inside the cone
+#: (cosθ >= cos angle), none outside, instead of the s² falloff between the two cones.
+SPOT_HARD_EDGE = 1e-9

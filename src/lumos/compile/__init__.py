@@ -128,17 +128,22 @@ def _lights(scene, materials: _Materials, emitters: list):
     kind = np.zeros(n, np.int32)
     samples = np.ones(n, np.int32)
     vecs = np.zeros((n, 6, 3))
-    scalars = np.zeros((n, 5))
+    scalars = np.zeros((n, L.LS_SIZE))
     for i, light in enumerate(scene.lights):
-        if light.type in ("point", "directional"):
+        if light.type in ("point", "spot", "directional"):
             vecs[i, L.LV_DIFFUSE] = light.diffuse_intensity
             vecs[i, L.LV_SPECULAR] = light.specular_intensity
             scalars[i, : 3] = (1.0, 0.0, 0.0)
-            if light.type == "point":
+            if light.type in ("point", "spot"):
                 kind[i] = L.LIGHT_POINT
                 vecs[i, L.LV_POSITION] = light.position
                 scalars[i, :3] = light.attenuation
-            else:
+            if light.type == "spot":
+                kind[i] = L.LIGHT_SPOT
+                vecs[i, L.LV_DIRECTION] = np.divide(light.direction, np.linalg.norm(light.direction))
+                scalars[i, L.LS_COS_OUTER] = spot_cos(light.angle)
+                scalars[i, L.LS_COS_INNER] = spot_cos(light.inner_angle)
+            elif light.type == "directional":
                 kind[i] = L.LIGHT_DIRECTIONAL
                 vecs[i, L.LV_DIRECTION] = np.divide(light.direction, np.linalg.norm(light.direction))
             continue
@@ -178,6 +183,11 @@ def _lights(scene, materials: _Materials, emitters: list):
             m[:3, 3] = light.center
             emitters.append((L.SHAPE_SPHERE, m, mat, i))
     return kind, samples, vecs, scalars
+
+
+def spot_cos(degrees: float) -> float:
+    """cos of a spot light's cone half-angle; exactly 0 at 90 degrees (a half-space, as a point light's lit side)."""
+    return 0.0 if degrees == 90.0 else float(np.cos(np.radians(degrees)))
 
 
 def compile_scene(scene, settings=None) -> CompiledScene:

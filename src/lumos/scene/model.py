@@ -608,8 +608,9 @@ class _LocalLight(StrictModel):
         return self.specular if self.specular is not None else self.intensity
 
 
-class PointLight(_LocalLight):
-    type: Literal["point"]
+class _PositionedLight(_LocalLight):
+    """A light at a point, dimmed by distance: `att(d) = c + l·d + q·d²` from `attenuation: [c, l, q]`."""
+
     position: Vec3
     attenuation: tuple[NonNegative, NonNegative, NonNegative] = (1.0, 0.0, 0.0)
 
@@ -622,6 +623,29 @@ class PointLight(_LocalLight):
     def _check(self):
         if sum(self.attenuation) <= 0:
             raise ValueError("attenuation [c, l, q] must not be all zero")
+        return self
+
+
+class PointLight(_PositionedLight):
+    """Shines equally in every direction."""
+
+    type: Literal["point"]
+
+
+class SpotLight(_PositionedLight):
+    """A point light limited to a cone about `direction`: full intensity within `inner_angle` of the axis, none
+    beyond `angle`, and between them the factor s² with s = (cosθ − cos angle)/(cos inner_angle − cos angle)
+    (glTF KHR_lights_punctual's recommended falloff; angles are half-angles in degrees)."""
+
+    type: Literal["spot"]
+    direction: Direction
+    angle: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False)] = 45.0
+    inner_angle: Annotated[float, Field(ge=0, le=90, allow_inf_nan=False)] = 0.0
+
+    @model_validator(mode="after")
+    def _check_cone(self):
+        if self.inner_angle > self.angle:
+            raise ValueError(f"inner_angle ({self.inner_angle:g}) must not exceed angle ({self.angle:g})")
         return self
 
 
@@ -683,6 +707,7 @@ def _light_tag(value: Any) -> Optional[str]:
 Light = Annotated[
     Union[
         Annotated[PointLight, Tag("point")],
+        Annotated[SpotLight, Tag("spot")],
         Annotated[DirectionalLight, Tag("directional")],
         Annotated[RectLight, Tag("area.rect")],
         Annotated[DiskLight, Tag("area.disk")],
@@ -691,10 +716,12 @@ Light = Annotated[
     Discriminator(
         _light_tag,
         custom_error_type="light_type",
-        custom_error_message="lights need type: point, directional or area (area needs shape: rect, disk or sphere)",
+        custom_error_message=(
+            "lights need type: point, spot, directional or area (area needs shape: rect, disk or sphere)"
+        ),
     ),
 ]
-LIGHT_TYPES = ("point", "directional", "area")
+LIGHT_TYPES = ("point", "spot", "directional", "area")
 
 # ----------------------------------------------------------------------------------------------------- scene
 
