@@ -396,3 +396,64 @@ def test_dict_scene_includes_relative_to_cwd(monkeypatch):
     scene = lumos.load_scene({"objects": [{"type": "model", "file": "bunny_res4.ply", "material": {"kd": 0.5}}]})
     assert scene.objects[0].type == "mesh" and scene.objects[0].material.kd == (0.5, 0.5, 0.5)
     assert scene.objects[0].name == "bunny_res4.ply/bunny_res4"
+
+
+# --------------------------------------------------------------- real files (once the importers are on main)
+
+
+def test_examples_load():
+    scene = lumos.load_scene(Path(__file__).parents[1] / "examples/models/bunny_and_shapes.yaml")
+    assert [o.type for o in scene.objects] == ["rect", "mesh", "sphere", "sphere", "box"]
+    assert scene.objects[1].material == "clay"
+
+
+def test_teapot_example_overrides_the_mtl_material():
+    pytest.importorskip("lumos.io.obj")
+    scene = lumos.load_scene(Path(__file__).parents[1] / "examples/models/teapot.yaml")
+    glaze = scene.materials["teapot.obj:default"]
+    assert glaze.kd == (0.6, 0.1, 0.08) and glaze.texture is None  # given
+    assert glaze.ks == pytest.approx((0.2, 0.2, 0.2))  # kept from the MTL file's Ks
+
+
+def test_mcguire_cornell_box_is_lit_by_its_ke_light(capsys, tmp_path):
+    pytest.importorskip("lumos.io.obj")
+    box = DATA / "models/CornellBox-Original.obj"
+    scene = lumos.load_scene(box)
+    assert scene.render.method == "path" and scene.lights == []
+    assert any(max(m.emission) > 0 for m in scene.materials.values())
+    out = tmp_path / "box.npy"
+    code, _, err = run(capsys, "render", box, "-o", out, "--width", "32", "--height", "24", "--spp", "4", "--quiet")
+    assert code == 0, err
+    img = np.load(out)
+    assert np.isfinite(img).all() and img.mean() > 0.05  # the walls are lit, not just the light
+
+
+def test_gltf_with_its_own_camera():
+    pytest.importorskip("lumos.io.gltf")
+    path = DATA / "models/Cameras.gltf"
+    scene = lumos.load_scene(path)
+    assert np.allclose(scene.camera.position, (0.5, 0.5, 3.0))
+    assert scene.camera.type == "perspective" and scene.camera.fov == pytest.approx(math.degrees(0.7))
+    scene = lumos.load_scene({"camera": {"file": str(path), "index": 1}, "objects": [
+        {"type": "model", "file": str(path)}]})
+    assert scene.camera.type == "orthographic"
+
+
+def test_override_can_drop_a_file_texture(fake_importer, tmp_path):
+    from PIL import Image as PILImage
+
+    PILImage.new("RGB", (2, 2), (200, 10, 10)).save(tmp_path / "wood.png")
+
+    def textured(p):
+        m = cube_model(p)
+        m.materials["Metal"]["texture"] = {"type": "image", "file": str((tmp_path / "wood.png").resolve())}
+        return m
+
+    fake_importer["wood.obj"] = textured
+    touch(tmp_path, "wood.obj")
+    path = write(tmp_path, "objects:\n  - {type: model, file: wood.obj}\n"
+                           "  - {type: model, file: wood.obj, materials_override: {Metal: {texture: null}}}\n")
+    scene = lumos.load_scene(path)
+    kept, dropped = scene.materials["wood.obj:Metal"], scene.materials["wood.obj#2:Metal"]
+    assert kept.texture is not None and kept.texture._path == (tmp_path / "wood.png").resolve()
+    assert dropped.texture is None and dropped.kd == kept.kd
