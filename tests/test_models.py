@@ -457,3 +457,17 @@ def test_override_can_drop_a_file_texture(fake_importer, tmp_path):
     kept, dropped = scene.materials["wood.obj:Metal"], scene.materials["wood.obj#2:Metal"]
     assert kept.texture is not None and kept.texture._path == (tmp_path / "wood.png").resolve()
     assert dropped.texture is None and dropped.kd == kept.kd
+
+
+def test_importer_warnings_are_lumos_warnings(fake_importer, tmp_path, capsys):
+    def sloppy(p):
+        m = cube_model(p)
+        m.warnings.append(f"{p}:3: mtllib missing.mtl: no such file; default materials used")
+        return m
+
+    fake_importer["sloppy.obj"] = sloppy
+    touch(tmp_path, "sloppy.obj")
+    with pytest.warns(lumos.LumosWarning, match="missing.mtl: no such file"):
+        lumos.load_scene(write(tmp_path, "objects: [{type: model, file: sloppy.obj}]\n"))
+    code, out, err = run(capsys, "info", tmp_path / "sloppy.obj")
+    assert code == 0 and "lumos: warning: " in err and "missing.mtl" in err
