@@ -583,11 +583,32 @@ class Csg(ObjectBase):
 Solid = Annotated[Union[Sphere, Box, Cylinder, Cone, Mesh, Csg], Field(discriminator="type")]
 Csg.model_rebuild()
 
+
+class ModelInclude(ObjectBase):
+    """A model file (OBJ+MTL, glTF, GLB, PLY, STL, OFF) included as objects. The loader expands it into the
+    file's meshes, with `transform` applied after their own, and its materials, named `<name or file name>:<the
+    file's name>`: `materials_override` merges keys over a file's material, `material` replaces them all;
+    `lights: true` adds the file's lights (moved by `transform`). Paths are relative to the scene file."""
+
+    type: Literal["model"]
+    file: str
+    materials_override: dict[str, Material] = Field(default_factory=dict)
+    lights: bool = False
+
+    @model_validator(mode="after")
+    def _check(self):
+        if any(self.motion):
+            raise ValueError("motion: a model's meshes cannot move (motion blur takes analytic shapes)")
+        if self.material is not None and self.materials_override:
+            raise ValueError("give material (replaces every material of the file) or materials_override, not both")
+        return self
+
+
 Object = Annotated[
-    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Rect, Triangle, Mesh, Csg],
+    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Rect, Triangle, Mesh, Csg, ModelInclude],
     Field(discriminator="type"),
 ]
-OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "rect", "triangle", "mesh", "csg")
+OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "rect", "triangle", "mesh", "csg", "model")
 
 # ---------------------------------------------------------------------------------------------------- lights
 
@@ -737,6 +758,8 @@ class Scene(StrictModel):
     materials: dict[str, Material] = Field(default_factory=dict)
     objects: list[Object] = Field(default_factory=list)
     _source: Optional[Path] = PrivateAttr(default=None)
+    #: what the loader included from model files (`type: model`, a camera's `file`), one line each, for `lumos info`
+    _included: list = PrivateAttr(default_factory=list)
 
     @model_validator(mode="after")
     def _check_material_names(self):
