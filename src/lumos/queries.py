@@ -511,10 +511,12 @@ def _integrate(f, o, d, t0, t1, k):
 
 def _interference(rc: RayCaster, ia: int, ib: int, tol: float, res: int, seed: int) -> Interference:
     ba, bb = rc._object_bounds[ia], rc._object_bounds[ib]
-    lo = np.maximum(ba[0], bb[0]) - tol
-    hi = np.minimum(ba[1], bb[1]) + tol
-    if (hi < lo).any():  # the boxes, grown by the tolerance, do not even touch
-        return Interference(False, 0.0, 0.0, np.zeros((0, 3)), 0.0, None)
+    if not (np.isfinite(ba).all() and np.isfinite(bb).all()):
+        raise LumosError("interference: both objects must be bounded")
+    # the overlap of the two boxes; on an axis where they are apart, the gap between them (rays along that axis
+    # then cross both solids' facing surfaces: the clearance estimate)
+    lo, hi = np.maximum(ba[0], bb[0]), np.minimum(ba[1], bb[1])
+    lo, hi = np.minimum(lo, hi) - tol, np.maximum(lo, hi) + tol
     sel = np.zeros(len(rc.names), bool)
     sel[[ia, ib]] = True
     rng = np.random.default_rng(seed)
