@@ -134,7 +134,7 @@ class RayCaster:
                 if obj.type in _SOLID_TYPES or (obj.type in ("cylinder", "cone") and obj.capped):
                     solid[i] = True
                 elif obj.type == "mesh":
-                    open_edges[i] = _open_edges(self._arrays, i)
+                    open_edges[i] = _open_edges(obj)
                     solid[i] = closed[i] = open_edges[i] == 0
             self._closed = (solid, closed, open_edges)
         return self._closed
@@ -450,18 +450,19 @@ def _t_min(value, n):
     return arr
 
 
-def _open_edges(sa, object_id) -> int:
-    """How many edges of mesh object `object_id` (its BVH triangles, vertices merged by position) border an odd
-    number of faces: 0 for a closed mesh."""
-    v = sa.tri_verts[sa.tri_info[:, 2] == object_id].reshape(-1, 3)
-    if not len(v):
+def _open_edges(obj) -> int:
+    """How many edges of a mesh object (its vertices merged by position) border an odd number of faces: 0 for a
+    closed mesh."""
+    faces = np.asarray(obj.faces, np.int64).reshape(-1, 3)
+    if not len(faces):
         return 0
-    _, index = np.unique(v, axis=0, return_inverse=True)
-    tri = index.reshape(-1, 3)
+    v = np.ascontiguousarray(np.asarray(obj.vertices, np.float64)) + 0.0  # -0.0 and 0.0: one position
+    # merge by position: one sort of the vertices (not of every face corner)
+    _, index = np.unique(v.view(np.dtype((np.void, 24))).ravel(), return_inverse=True)
+    tri = index.ravel()[faces]
     edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
     edges = edges[edges[:, 0] != edges[:, 1]]
-    key = edges[:, 0].astype(np.int64) * (int(index.max()) + 1) + edges[:, 1]
-    _, counts = np.unique(key, return_counts=True)
+    _, counts = np.unique(edges[:, 0] * (int(index.max()) + 1) + edges[:, 1], return_counts=True)
     return int((counts % 2 == 1).sum())
 
 
