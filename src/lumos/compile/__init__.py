@@ -36,6 +36,9 @@ class CompiledScene:
     patches: Optional[object] = None  # radiosity.patches.Patches, for method radiosity
     digest: str = ""  # radiosity: the fingerprint of the geometry and materials a solution depends on
     material_names: list = field(default_factory=list)  # a name for each material row (messages, explain)
+    #: int64 (nt,): for each BVH-ordered triangle, its index in the objects' triangles taken in scene order (each
+    #: mesh's prepared faces, one object after another): ray queries report a hit's face of its own mesh
+    triangle_order: Optional[np.ndarray] = None
 
 
 class _Materials:
@@ -345,7 +348,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
     else:
         bounds = np.zeros((2, 3))
     return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names,
-                         material_names=_material_names(scene, materials))
+                         material_names=_material_names(scene, materials), triangle_order=tri_order)
 
 
 def triangle_arrays(tri_verts: np.ndarray, tri_ids: np.ndarray) -> CompiledScene:
