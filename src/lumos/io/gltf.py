@@ -317,7 +317,7 @@ class Document:
             raise self.error(f"{at}.componentType", f"must be one of {', '.join(map(str, COMPONENT_TYPES))}, "
                              f"got {ctype}")
         kind = acc.get("type")
-        if kind not in ACCESSOR_TYPES:
+        if not isinstance(kind, str) or kind not in ACCESSOR_TYPES:
             raise self.error(f"{at}.type", f"must be one of {', '.join(ACCESSOR_TYPES)}, got {_show(kind)}")
         count, ncomp, dtype = self.int(acc, "count", at, lo=1), ACCESSOR_TYPES[kind], np.dtype(COMPONENT_TYPES[ctype])
         if "bufferView" in acc:
