@@ -629,3 +629,9 @@ def test_corrupted_glb_bytes_import_or_refuse_in_one_line(tmp_path, data):
     path = tmp_path / "c.glb"
     path.write_bytes(bytes(raw))
     import_or_refuse(path)
+
+
+def test_error_node_cycle(tmp_path):
+    def change(g):
+        g.json["nodes"][0]["children"] = [0]
+    assert "nodes[0]: is reached twice" in error_of(corrupt(tmp_path, change))
