@@ -248,7 +248,8 @@ def test_tangents_pass_through_and_validate(tmp_path):
     g = one_triangle()
     g.json["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = g.accessor([[1, 0, 0, 1]] * 3)
     model = import_gltf(g.write(tmp_path / "t.gltf"))
-    np.testing.assert_allclose(model.objects[0]["tangents"], [[1, 0, 0, -1]] * 3)  # w flips with v
+    # B = w·(N × T) = +y: up the image in glTF (green is up), +v in lumos after the flip, so w passes through
+    np.testing.assert_allclose(model.objects[0]["tangents"], [[1, 0, 0, 1]] * 3)
     lumos.load_scene(scene_of(model))
 
 

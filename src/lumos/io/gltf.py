@@ -474,9 +474,10 @@ def _primitive(doc: Document, prim: dict, at: str, world: np.ndarray) -> dict | 
         obj["uvs"] = np.column_stack([uvs[:, 0], 1.0 - uvs[:, 1]])  # glTF v runs down the image, lumos's up
     tangents = attribute("TANGENT", 4)
     if tangents is not None:
+        # glTF's bitangent B = w·(N × T) points up the image (its normal maps' green is "up"), which is lumos's +v
+        # after the v flip, so w passes through; a mirroring transform turns N × T over, and w with it
         w = np.where(tangents[:, 3] < 0, -1.0, 1.0) * (-1.0 if mirrored else 1.0)
-        # v flipped: the bitangent B = w·(N × T) points along +v of the file, −v of lumos's uvs, so w changes sign
-        obj["tangents"] = np.column_stack([_unit_rows(tangents[:, :3] @ linear.T), -w])
+        obj["tangents"] = np.column_stack([_unit_rows(tangents[:, :3] @ linear.T), w])
     return obj
 
 
