@@ -514,29 +514,43 @@ def closest(objects, o, d, t_max=np.inf):
     return t_best, idx, n_best
 
 
+def spot_falloff(light: dict, L):
+    """A spot light's falloff towards points that see it along the unit rows of L (n, 3): s², s = clamp((cosθ −
+    cos angle)/(cos inner_angle − cos angle), 0, 1), cosθ = −axis·L; a step when the two angles are equal."""
+    cos_t = -(L @ unit(light["direction"]))
+    co = math.cos(math.radians(light.get("angle", 45.0)))
+    ci = math.cos(math.radians(light.get("inner_angle", 0.0)))
+    if ci - co < 1e-9:
+        return np.where(cos_t >= co, 1.0, 0.0)
+    return np.clip((cos_t - co) / (ci - co), 0.0, 1.0) ** 2
+
+
 def classic_local(p, n, V, mat, lights, ambient):
-    """Ka·Ia + Σ [Kd·Id·max(N·L,0) + Ks·Is·max(R·V,0)^n] / att(d), R = 2(N·L)N − L (DESIGN.md §3)."""
+    """Ka·Ia + Σ [Kd·Id·max(N·L,0) + Ks·Is·max(R·V,0)^n] / att(d), R = 2(N·L)N − L (DESIGN.md §3); a spot
+    light's term times its falloff."""
     out = np.zeros(p.shape) + mat["ka"] * _rgb(ambient)
     for light in lights:
         intensity = light.get("intensity", 1.0)
         Id = _rgb(light.get("diffuse", intensity))
         Is = _rgb(light.get("specular", intensity))
-        if light["type"] == "point":
+        if light["type"] in ("point", "spot"):
             to = np.asarray(light["position"], dtype=np.float64) - p
             dist = np.linalg.norm(to, axis=1)
             L = to / dist[:, None]
             c, lin, q = light.get("attenuation", (1.0, 0.0, 0.0))
             att = c + lin * dist + q * dist * dist
+            gain = spot_falloff(light, L) if light["type"] == "spot" else np.ones(len(p))
         elif light["type"] == "directional":
             L = np.broadcast_to(-unit(light["direction"]), p.shape)
             att = np.ones(len(p))
+            gain = np.ones(len(p))
         else:
             raise NotImplementedError(light["type"])
         n_dot_l = _dot(n, L)
         lit = n_dot_l > 0.0
         R = 2.0 * n_dot_l[:, None] * n - L
         spec = np.maximum(_dot(R, V), 0.0) ** mat["shininess"]
-        term = (mat["kd"] * Id * n_dot_l[:, None] + mat["ks"] * Is * spec[:, None]) / att[:, None]
+        term = (mat["kd"] * Id * n_dot_l[:, None] + mat["ks"] * Is * spec[:, None]) * (gain / att)[:, None]
         out += np.where(lit[:, None], term, 0.0)
     return out
 
@@ -707,7 +721,7 @@ def whitted_local(p, n, V, mat, scene, objects, mats, solid):
     out = mat["ka"] * _rgb(scene.get("ambient", 0.0)) + np.zeros(p.shape)
     origin = offset_origin(p, n, np.ones(len(p)))
     for light in scene.get("lights", []):
-        if light["type"] == "point":
+        if light["type"] in ("point", "spot"):
             to = np.asarray(light["position"], dtype=np.float64) - origin
             dist = np.linalg.norm(to, axis=1)
             L = to / dist[:, None]

@@ -192,10 +192,92 @@ def _prim_boxes(scene, arrays):
     return out
 
 
+def check_wide_tree(arrays, prim_boxes):
+    """The 4-wide tree that traversal walks: every leaf of the binary tree is one child slot, each slot's box
+    is that leaf's (so every primitive lies in it), empty slots are inverted boxes, and no node is shared."""
+    wide = np.asarray(arrays.wide_nodes)
+    link = np.asarray(arrays.wide_link)
+    assert wide.ctypes.data % 64 == 0 and wide.shape[1] == 32  # two whole cache lines per node
+    boxes = wide[:, :24].reshape(-1, 6, 4).astype(np.float64)
+    child, count = link[:, L.WIDE_CHILD:L.WIDE_CHILD + 4], link[:, L.WIDE_COUNT:L.WIDE_COUNT + 4]
+    seen_nodes = np.zeros(len(wide), int)
+    seen_slots = np.zeros(len(arrays.prim_ref), int)
+    stack = [0]
+    while stack:
+        w = stack.pop()
+        seen_nodes[w] += 1
+        for k in range(4):
+            lo, hi = boxes[w, :3, k], boxes[w, 3:, k]
+            if count[w, k] < 0:  # empty: +inf min, -inf max
+                assert np.all(lo == np.inf) and np.all(hi == -np.inf)
+            elif count[w, k] == 0:
+                sub = boxes[child[w, k]]
+                used = count[child[w, k]] >= 0
+                assert (lo[:, None] <= sub[:3, used]).all() and (sub[3:, used] <= hi[:, None]).all()  # nested
+                stack.append(int(child[w, k]))
+            else:
+                first, n = child[w, k], count[w, k]
+                seen_slots[first:first + n] += 1
+                for r in arrays.prim_ref[first:first + n]:
+                    pb = prim_boxes[int(r)]
+                    assert (lo <= pb[:3]).all() and (pb[3:] <= hi).all(), (w, k, r)
+    assert seen_nodes.max() == 1 and (seen_nodes == 1).all()  # every wide node reached exactly once
+    assert (seen_slots == 1).all()  # the leaves partition prim_ref
+
+
 def test_tree_invariants_mixed_scene(mixed):
     scene, _, compiled, *_ = mixed
     depth = check_tree(compiled, _prim_boxes(scene, compiled.arrays))
     assert depth >= 5  # a real tree, not one leaf
+    check_wide_tree(compiled.arrays, _prim_boxes(scene, compiled.arrays))
+    assert len(compiled.arrays.wide_nodes) < len(compiled.arrays.node_box) / 2.5  # ~3 binary levels per node
+
+
+def test_wide_box_test_vector_code_equals_scalar_twin(rng):
+    """`simd.box4_test` compiled (LLVM <4 x double> code) against its interpreted body and against the binary
+    tree's scalar slab test, lane by lane: same mask, same entry distances, on random boxes, rays from inside
+    and outside, axis-parallel directions, empty slots and finite t_max."""
+    import numba
+
+    from lumos.kernels.intersect import box_setup, intersect_node_box
+    from lumos.kernels.simd import box4_test
+
+    @numba.njit
+    def compiled(nodes, j, rb, t_max):
+        return box4_test(nodes, j, 4 * rb[6], 4 * rb[7], 4 * rb[8], rb[3], rb[4], rb[5], rb[0], rb[1], rb[2],
+                         t_max)
+
+    n = 200
+    lo = rng.uniform(-2, 1, (n, 3, 4))
+    hi = lo + rng.uniform(0.0, 1.5, (n, 3, 4))
+    nodes = np.zeros((n, 32), np.float32)
+    nodes[:, :12] = lo.reshape(n, 12)
+    nodes[:, 12:24] = hi.reshape(n, 12)
+    nodes[::7, 8:12:3], nodes[::7, 20:24:3] = np.inf, -np.inf  # some empty slots (z rows of lanes 0 and 3)
+    nodes[::7, 0:4:3], nodes[::7, 4:8:3] = np.inf, np.inf
+    nodes[::7, 12:16:3], nodes[::7, 16:20:3] = -np.inf, -np.inf
+    agree = 0
+    for i in range(n):
+        o = rng.uniform(-3, 3, 3)
+        aim = (lo[i, :, i % 4] + hi[i, :, i % 4]) / 2  # towards one of the boxes, give or take
+        d = aim - o + rng.normal(scale=0.3, size=3)
+        if i % 5 == 0:
+            d[rng.integers(3)] = 0.0  # axis-parallel in one coordinate
+        rb = box_setup(o, d)
+        t_max = 1e30 if i % 2 else float(rng.uniform(0.5, 4))
+        got = compiled(nodes, i, rb, t_max)
+        twin = box4_test(nodes, i, 4 * rb[6], 4 * rb[7], 4 * rb[8], rb[3], rb[4], rb[5], rb[0], rb[1], rb[2], t_max)
+        assert got[0] == twin[0]
+        np.testing.assert_array_equal(got[1:], twin[1:])
+        for k in range(4):  # against the binary tree's scalar test of the same box
+            box = np.zeros((1, 8), np.float32)
+            box[0, :6] = nodes[i, k:24:4]
+            t = intersect_node_box(box, 0, rb, t_max)
+            assert bool(got[0] >> k & 1) == (t != -1.0)
+            if t != -1.0:
+                assert got[1 + k] == t
+                agree += 1
+    assert 100 < agree < 700  # the test saw hits as well as misses
 
 
 def test_tree_invariants_and_traversal_on_degenerate_inputs(rng):

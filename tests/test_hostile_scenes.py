@@ -61,6 +61,8 @@ def objects(draw):
 LIGHTS = st.one_of(
     st.fixed_dictionaries({"type": st.just("point"), "position": VEC}, optional={"intensity": COLOR}),
     st.fixed_dictionaries({"type": st.just("directional"), "direction": VEC}, optional={"intensity": COLOR}),
+    st.fixed_dictionaries({"type": st.just("spot"), "position": VEC, "direction": VEC},
+                          optional={"angle": NUMBER, "inner_angle": NUMBER, "intensity": COLOR}),
     st.fixed_dictionaries({"type": st.just("area"), "shape": st.just("sphere"), "center": VEC, "radius": NUMBER},
                           optional={"samples": NUMBER}),
     st.fixed_dictionaries({"type": st.just("area"), "shape": st.just("rect"), "corner": VEC, "edge_u": VEC,

@@ -142,8 +142,10 @@ BAD_SCENES = [
     ("unknown_object_type", "objects:\n  - type: sphre\n", 2,
      ["objects[0]: unknown object type 'sphre' (did you mean 'sphere'? types: sphere, plane"]),
     ("object_without_type", "objects:\n  - radius: 1\n", 2, ["objects[0]: missing required key 'type'"]),
-    ("unknown_light_type", "lights:\n  - type: spot\n", 2,
-     ["lights[0]: unknown light type 'spot'", "types: point, directional, area"]),
+    ("unknown_light_type", "lights:\n  - type: torch\n", 2,
+     ["lights[0]: unknown light type 'torch'", "types: point, spot, directional, area"]),
+    ("spot_light_without_direction", "lights:\n  - type: spot\n    position: [0, 1, 0]\n", 2,
+     ["lights[0]: missing required key 'direction'"]),
     ("area_light_without_shape", "lights:\n  - type: area\n    radiance: 1\n", 2,
      ["lights[0]: missing required key 'shape' (area light shapes: rect, disk, sphere)"]),
     ("point_light_without_position", "lights:\n  - type: point\n", 2,
@@ -204,8 +206,8 @@ def test_not_utf8(tmp_path):
     assert error_of(path).startswith(f"{path}: not a UTF-8 text file (byte 0xff")
 
 
-def test_wrong_extension(tmp_path):
-    path = write(tmp_path, TRIANGLE_OBJ, "bunny.obj")
+def test_wrong_extension(tmp_path):  # (model files, .obj and the rest, load as a scene: tests/test_models.py)
+    path = write(tmp_path, TRIANGLE_OBJ, "bunny.txt")
     assert error_of(path).startswith(f"{path}: scene files must end in .yaml, .yml or .json")
 
 

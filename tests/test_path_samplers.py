@@ -20,6 +20,7 @@ import lumos
 from lumos.compile import compile_scene
 from lumos.kernels import bsdf
 from lumos.kernels.emitters import emitter_pdf, sample_emitter
+from lumos.kernels.layout import LIGHT_SPHERE
 from lumos.kernels.surface import surface_at
 from lumos.kernels.traverse import closest_hit
 from lumos.kernels.views import geometry_of, lighting_of, surfaces_of
@@ -225,7 +226,7 @@ def _emitter_pdfs(em, geo, surf, lit, p, dirs):
         q, n_geo, n_sh, uu, vv, mat, obj, light = surface_at(surf, p, d, hit[0], ref, hit[2], hit[3], hit[4], 0.0)
         if light >= 0:
             e = em.light_emit[light]
-            if n_geo[0] * d[0] + n_geo[1] * d[1] + n_geo[2] * d[2] >= 0.0 and lit.light_kind[light] != 4:
+            if n_geo[0] * d[0] + n_geo[1] * d[1] + n_geo[2] * d[2] >= 0.0 and lit.light_kind[light] != LIGHT_SPHERE:
                 continue  # the back of a one-sided light: never sampled
         elif ref >= 0:
             e = em.tri_emit[ref]

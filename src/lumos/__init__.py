@@ -13,7 +13,8 @@ from .errors import LumosError, LumosWarning
 from .scene import Scene, load_scene
 
 __version__ = "0.1.0"
-__all__ = ["Image", "LumosError", "LumosWarning", "Scene", "__version__", "explain", "load_scene", "render"]
+__all__ = ["Image", "LumosError", "LumosWarning", "RayCaster", "Scene", "__version__", "explain", "load_scene",
+           "render"]
 
 
 def __getattr__(name: str):
@@ -21,6 +22,10 @@ def __getattr__(name: str):
         from .image import Image
 
         return Image
+    if name == "RayCaster":  # the ray-query API (lumos.queries)
+        from .queries import RayCaster
+
+        return RayCaster
     if name == "explain":
         from .explaining import explain
 

@@ -218,4 +218,5 @@ def scene_info(scene: Scene) -> dict:
         "camera": camera,
         "render": scene.render.model_dump(),
         "methods": ", ".join(METHODS),
+        **({"included": "; ".join(scene._included)} if scene._included else {}),
     }

@@ -9,9 +9,13 @@ BVH_MAX_LEAF = 4
 BVH_BINS = 16
 #: SAH cost of one traversal step (two child-box tests) relative to one primitive test.
 BVH_COST_TRAVERSAL = 1.0
-#: BVH traversal stack depth (the builder guarantees the tree is not deeper).
-BVH_STACK = 64
+#: BVH traversal stack depth: the 4-wide walk pushes at most three entries per level and the tree is at most
+#: `kernels.bvh_build.MAX_DEPTH` (60) levels deep, so 3·60 + 1 entries always suffice.
+BVH_STACK = 192
 #: Largest image the film will allocate (pixels), and the default render size.
 MAX_PIXELS = 16384 * 16384
 DEFAULT_WIDTH = 640
 DEFAULT_HEIGHT = 480
+#: A spot light whose cos(inner_angle) − cos(angle) is below this has a hard edge: full light inside the cone
+#: (cosθ >= cos angle), none outside, instead of the s² falloff between the two cones.
+SPOT_HARD_EDGE = 1e-9

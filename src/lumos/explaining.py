@@ -82,13 +82,16 @@ def _v(a) -> list:
 
 
 def _per_light(rows, context) -> list:
-    from .kernels.illumination import PL_COS, PL_DIFFUSE, PL_LIT, PL_SHADOW, PL_SPECULAR
+    from .kernels.illumination import PL_COS, PL_DIFFUSE, PL_LIT, PL_SHADOW, PL_SPECULAR, PL_SPOT
 
     out = []
     for j, row in enumerate(rows):
-        out.append({"light": j, "type": context.lights[j], "n_dot_l": float(row[PL_COS]),
-                    "shadow": _v(row[PL_SHADOW:PL_SHADOW + 3]), "samples_lit": int(row[PL_LIT]),
-                    "diffuse": _v(row[PL_DIFFUSE:PL_DIFFUSE + 3]), "specular": _v(row[PL_SPECULAR:PL_SPECULAR + 3])})
+        entry = {"light": j, "type": context.lights[j], "n_dot_l": float(row[PL_COS]),
+                 "shadow": _v(row[PL_SHADOW:PL_SHADOW + 3]), "samples_lit": int(row[PL_LIT]),
+                 "diffuse": _v(row[PL_DIFFUSE:PL_DIFFUSE + 3]), "specular": _v(row[PL_SPECULAR:PL_SPECULAR + 3])}
+        if context.lights[j] == "spot":  # the cone's falloff s² towards the point (1 inside inner_angle)
+            entry["spot_falloff"] = float(row[PL_SPOT])
+        out.append(entry)
     return out
 
 
@@ -387,10 +390,14 @@ def _text_ray(node, indent, lines):
 
 
 def _light_text(light) -> str:
+    head = f"light {light['light']} ({light['type']}): "
+    if light.get("spot_falloff", 1.0) == 0.0:
+        return head + "outside its cone (spot falloff 0), nothing"
     if light["samples_lit"] == 0 and light["n_dot_l"] <= 0.0 and not any(light["shadow"]):
-        return f"light {light['light']} ({light['type']}): behind the surface (N·L <= 0), nothing"
-    return (f"light {light['light']} ({light['type']}): N·L {light['n_dot_l']:.4f}, shadow {_rgb(light['shadow'])}, "
-            f"diffuse {_rgb(light['diffuse'])}, specular {_rgb(light['specular'])}"
+        return head + "behind the surface (N·L <= 0), nothing"
+    return (head + f"N·L {light['n_dot_l']:.4f}, shadow {_rgb(light['shadow'])}, "
+            + (f"spot falloff {light['spot_falloff']:.4f}, " if "spot_falloff" in light else "")
+            + f"diffuse {_rgb(light['diffuse'])}, specular {_rgb(light['specular'])}"
             + (f", {light['samples_lit']} samples lit" if light["type"].startswith("area") else ""))
 
 

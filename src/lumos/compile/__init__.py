@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import LumosError
 from ..kernels import layout as L
-from .bvh import build, pack_nodes
+from .bvh import build, pack_nodes, wide_nodes
 from .meshprep import prepare_mesh
 from .raster import RasterMesh, build_raster_mesh
 from .shapes import canonical, frame, rect_canonical, world_bounds
@@ -36,6 +36,9 @@ class CompiledScene:
     patches: Optional[object] = None  # radiosity.patches.Patches, for method radiosity
     digest: str = ""  # radiosity: the fingerprint of the geometry and materials a solution depends on
     material_names: list = field(default_factory=list)  # a name for each material row (messages, explain)
+    #: int64 (nt,): for each BVH-ordered triangle, its index in the objects' triangles taken in scene order (each
+    #: mesh's prepared faces, one object after another): ray queries report a hit's face of its own mesh
+    triangle_order: Optional[np.ndarray] = None
 
 
 class _Materials:
@@ -128,17 +131,22 @@ def _lights(scene, materials: _Materials, emitters: list):
     kind = np.zeros(n, np.int32)
     samples = np.ones(n, np.int32)
     vecs = np.zeros((n, 6, 3))
-    scalars = np.zeros((n, 5))
+    scalars = np.zeros((n, L.LS_SIZE))
     for i, light in enumerate(scene.lights):
-        if light.type in ("point", "directional"):
+        if light.type in ("point", "spot", "directional"):
             vecs[i, L.LV_DIFFUSE] = light.diffuse_intensity
             vecs[i, L.LV_SPECULAR] = light.specular_intensity
             scalars[i, : 3] = (1.0, 0.0, 0.0)
-            if light.type == "point":
+            if light.type in ("point", "spot"):
                 kind[i] = L.LIGHT_POINT
                 vecs[i, L.LV_POSITION] = light.position
                 scalars[i, :3] = light.attenuation
-            else:
+            if light.type == "spot":
+                kind[i] = L.LIGHT_SPOT
+                vecs[i, L.LV_DIRECTION] = np.divide(light.direction, np.linalg.norm(light.direction))
+                scalars[i, L.LS_COS_OUTER] = spot_cos(light.angle)
+                scalars[i, L.LS_COS_INNER] = spot_cos(light.inner_angle)
+            elif light.type == "directional":
                 kind[i] = L.LIGHT_DIRECTIONAL
                 vecs[i, L.LV_DIRECTION] = np.divide(light.direction, np.linalg.norm(light.direction))
             continue
@@ -178,6 +186,11 @@ def _lights(scene, materials: _Materials, emitters: list):
             m[:3, 3] = light.center
             emitters.append((L.SHAPE_SPHERE, m, mat, i))
     return kind, samples, vecs, scalars
+
+
+def spot_cos(degrees: float) -> float:
+    """cos of a spot light's cone half-angle; exactly 0 at 90 degrees (a half-space, as a point light's lit side)."""
+    return 0.0 if degrees == 90.0 else float(np.cos(np.radians(degrees)))
 
 
 def compile_scene(scene, settings=None) -> CompiledScene:
@@ -290,6 +303,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
     node_box, node_link, order, depth = build(prim_bounds)
     build_s = time.perf_counter() - t0
     node_box, node_link = pack_nodes(node_box, node_link)
+    wide_box, wide_link = wide_nodes(node_box, node_link)
 
     # leaf order: triangles are permuted so that leaves read them contiguously
     is_tri = order < n_tri
@@ -315,6 +329,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
         prim_ref=prim_ref,
         node_box=node_box,
         node_link=node_link,
+        wide_nodes=wide_box,
+        wide_link=wide_link,
         unbounded=unbounded,
         materials=material_rows,
         light_kind=light_kind,
@@ -332,7 +348,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
     else:
         bounds = np.zeros((2, 3))
     return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names,
-                         material_names=_material_names(scene, materials))
+                         material_names=_material_names(scene, materials), triangle_order=tri_order)
 
 
 def triangle_arrays(tri_verts: np.ndarray, tri_ids: np.ndarray) -> CompiledScene:

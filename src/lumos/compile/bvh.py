@@ -27,3 +27,21 @@ def pack_nodes(node_box: np.ndarray, node_link: np.ndarray):
     links[:, NODE_FIRST] = node_link[:, 0]
     links[:, NODE_COUNT] = node_link[:, 1]
     return packed, links
+
+
+def wide_nodes(node_box: np.ndarray, node_link: np.ndarray):
+    """The 4-wide tree of a packed binary one, packed into 128-byte nodes on 64-byte boundaries: (float32 (nw, 32),
+    its int32 view) — see `kernels.layout.WIDE_*` and `kernels.simd`."""
+    from ..kernels.bvh_build import collapse_wide
+    from ..kernels.layout import NODE_COUNT, NODE_FIRST, WIDE_CHILD, WIDE_COUNT
+
+    boxes, child, count = collapse_wide(node_box, node_link, NODE_FIRST, NODE_COUNT)
+    n = len(boxes)
+    raw = np.zeros(n * 32 + 16, np.float32)  # aligned by hand: a node is two whole cache lines
+    skip = (-raw.ctypes.data % 64) // 4
+    packed = raw[skip:skip + n * 32].reshape(n, 32)
+    packed[:, :24] = boxes.reshape(n, 24)
+    links = packed.view(np.int32)
+    links[:, WIDE_CHILD:WIDE_CHILD + 4] = child
+    links[:, WIDE_COUNT:WIDE_COUNT + 4] = count
+    return packed, links

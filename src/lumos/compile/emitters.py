@@ -13,6 +13,7 @@ Power, in the units of DESIGN.md §3 (a point light of intensity I delivers irra
 the mean of the RGB channels:
     area light, emissive primitive   π·Le·A (A its world area)
     point light                      4π·r²·π·I/att(r) at r = half the radius of the scene's bounds
+    spot light                       the same with Ω = ∫ falloff dω in place of 4π (`spot_solid_angle`)
     directional light                π·I·π·R² (R the radius of the scene's bounds)
 The last two are estimates (a delta light's power depends on the scene); any positive weights give the same
 image in expectation, these only make the noise smaller where lights of different kinds meet.
@@ -53,6 +54,14 @@ def physical_materials(names: list[str], rows: np.ndarray) -> np.ndarray:
             for c in (L.MAT_KD, L.MAT_KS, L.MAT_KR, L.MAT_KT):
                 rows[i, c : c + 3] *= scale
     return rows
+
+
+def spot_solid_angle(cos_outer: float, cos_inner: float) -> float:
+    """∫ falloff dω over the sphere of directions of a spot light (`kernels.illumination.spot_falloff`), in
+    steradians: 2π·∫ s(c)² dc over c = cosθ, which is 1 on [cos inner, 1] and ((c − cos outer)/(cos inner −
+    cos outer))² on [cos outer, cos inner], whose integral is (cos inner − cos outer)/3. A hard edge (equal
+    cosines) is the cone's solid angle 2π(1 − cos outer), the same formula's limit."""
+    return 2.0 * np.pi * ((1.0 - cos_inner) + max(cos_inner - cos_outer, 0.0) / 3.0)
 
 
 def _mean(rgb) -> float:
@@ -119,10 +128,12 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
     for j in range(len(lk)):
         light_emit[j] = len(kinds)
         intensity = _mean(lv[j, L.LV_DIFFUSE] + lv[j, L.LV_SPECULAR]) / 2.0
-        if lk[j] == L.LIGHT_POINT:
+        if lk[j] == L.LIGHT_POINT or lk[j] == L.LIGHT_SPOT:
             r = 0.5 * radius
             att = ls[j, L.LS_ATT_C] + ls[j, L.LS_ATT_L] * r + ls[j, L.LS_ATT_Q] * r * r
-            add(L.EMIT_LIGHT, j, 4.0 * np.pi * r * r * np.pi * intensity / att)
+            omega = 4.0 * np.pi if lk[j] == L.LIGHT_POINT else spot_solid_angle(ls[j, L.LS_COS_OUTER],
+                                                                               ls[j, L.LS_COS_INNER])
+            add(L.EMIT_LIGHT, j, omega * r * r * np.pi * intensity / att)
         elif lk[j] == L.LIGHT_DIRECTIONAL:
             add(L.EMIT_LIGHT, j, np.pi * intensity * np.pi * radius * radius)
         else:

@@ -326,3 +326,80 @@ def build_bvh(bounds, max_leaf, n_bins, cost_traversal):
             out_link[j, 1] = big_link[i, 1]
             out_link[j, 0] = big_link[i, 0] - shift[k] if big_link[i, 1] == 0 else big_link[i, 0]
     return out_box, out_link, order, depth
+
+
+# ------------------------------------------------------------------------------------------ the 4-wide tree
+
+#: Child slots of a wide node.
+WIDE = 4
+
+
+@njit_alloc
+def collapse_wide(node_box, node_link, first_col, count_col):
+    """The 4-wide BVH of a binary one (packed nodes: bounds in columns 0-5, links in `first_col`/`count_col` of
+    the int32 view `node_link`): each wide node takes a binary interior node's children and keeps opening the
+    largest interior one among them until it holds four (Wald et al. 2008, "Getting rid of packets"; Embree's
+    BVH4 collapse). Returns (boxes float32 (nw, 6, 4): per bound row, the four children's values; child int32
+    (nw, 4): a wide node index (count 0) or the first prim_ref entry of a leaf; count int32 (nw, 4): the leaf's
+    primitive count, 0 for a wide node, -1 for an empty slot, whose box is inverted (+inf min, -inf max) so that
+    every ray misses it). The wide tree is no deeper than the binary one."""
+    nn = node_box.shape[0]
+    cap = max(nn // 2 + 1, 1)
+    boxes = np.empty((cap, 6, WIDE), np.float32)
+    child = np.zeros((cap, WIDE), np.int32)
+    count = np.full((cap, WIDE), -1, np.int32)
+    boxes[:, :3, :] = np.inf
+    boxes[:, 3:, :] = -np.inf
+    if nn == 0:
+        return boxes[:0], child[:0], count[:0]
+    todo = np.empty(cap, np.int64)  # binary nodes whose children become wide node todo_w[k]
+    todo_w = np.empty(cap, np.int64)
+    n_todo = 0
+    n_wide = 1
+    slots = np.empty(WIDE, np.int64)
+    area = np.empty(6)
+    if node_link[0, count_col] > 0:  # the whole tree is one leaf
+        for r in range(6):
+            boxes[0, r, 0] = node_box[0, r]
+        child[0, 0] = node_link[0, first_col]
+        count[0, 0] = node_link[0, count_col]
+        return boxes[:1], child[:1], count[:1]
+    todo[0], todo_w[0] = 0, 0
+    n_todo = 1
+    while n_todo > 0:
+        n_todo -= 1
+        p, w = todo[n_todo], todo_w[n_todo]
+        c = np.int64(node_link[p, first_col])
+        slots[0], slots[1] = c, c + 1
+        n_slots = 2
+        while n_slots < WIDE:  # open the largest interior child
+            best, best_area = -1, -1.0
+            for s in range(n_slots):
+                q = slots[s]
+                if node_link[q, count_col] == 0:
+                    for r in range(6):
+                        area[r] = node_box[q, r]
+                    a = _half_area(area)
+                    if a > best_area:
+                        best, best_area = s, a
+            if best < 0:
+                break
+            q = slots[best]
+            cq = np.int64(node_link[q, first_col])
+            slots[best] = cq
+            slots[n_slots] = cq + 1
+            n_slots += 1
+        for s in range(n_slots):
+            q = slots[s]
+            for r in range(6):
+                boxes[w, r, s] = node_box[q, r]
+            if node_link[q, count_col] > 0:
+                child[w, s] = node_link[q, first_col]
+                count[w, s] = node_link[q, count_col]
+            else:
+                child[w, s] = n_wide
+                count[w, s] = 0
+                todo[n_todo], todo_w[n_todo] = q, n_wide
+                n_todo += 1
+                n_wide += 1
+    return boxes[:n_wide], child[:n_wide], count[:n_wide]

@@ -9,7 +9,7 @@ With one sample per pixel the pixel centre is used (jx = jy = 0.5); otherwise `s
 Random dimensions 0–1 place the sample in the pixel, 2–3 on the lens.
 """
 
-from .jit import njit, njit_inline
+from .jit import njit_inline
 from .layout import CAM_APERTURE, CAM_FOCUS, CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d

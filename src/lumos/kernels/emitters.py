@@ -8,7 +8,7 @@ of a direction that reaches it (for multiple importance sampling).
 The pdfs include the probability of picking the entry. Area lights use the routines of the classic model
 (`illumination.sample_light`): its weight w for an area light is the equivalent-intensity factor cosθ_y·A/(π·d²)
 (or Ω/π for a sphere), which is 1/(π·pdf) with pdf the solid-angle density of its sample. Delta lights (point,
-directional) return their irradiance factor instead (DESIGN.md §3: E = π·I·cosθ/att(d)) with delta = True.
+spot, directional) return their irradiance factor instead (DESIGN.md §3: E = π·I·cosθ/att(d)) with delta = True.
 
 Emissive primitives emit on both sides (as `raycast` and `whitted` show them); area lights of shape rect and
 disk on the side of their normal only. Emissive shapes are sampled uniformly over the area of their canonical
@@ -26,7 +26,6 @@ from .jit import njit, njit_inline
 from .layout import (
     EMIT_LIGHT,
     EMIT_PARTS,
-    EMIT_SHAPE,
     EMIT_SPHERE,
     EMIT_TRIANGLE,
     INFO_KIND,

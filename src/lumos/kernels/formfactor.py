@@ -23,10 +23,8 @@ about the side that sends light (towards x).
 
 import math
 
-import numpy as np
-
 from .. import config
-from .jit import njit, njit_inline
+from .jit import njit_inline
 from .rng import rand2_key
 from .sampling import stratified_2d
 from .traverse import any_hit

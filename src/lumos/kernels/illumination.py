@@ -3,10 +3,11 @@
     I = Ka·Ia + Σ_lights [ Kd·Id·max(N·L, 0) + Ks·Is·max(R·V, 0)^n ] / att(d),   R = 2(N·L)N − L
 
 per RGB channel (the textbook's Phong model, eq. for "illumination = ambient + diffuse + specular"), with
-`att(d) = c + l·d + q·d²` for point lights and att = 1 for directional ones. A light contributes nothing where
-N·L <= 0. An area light of radiance Le is sampled at `samples` stratified points; each sample y acts as a point
-light of intensity Le·cosθ_y·A / (π·r²·N), so that its diffuse part is Kd·E/π with E the irradiance the light
-delivers (DESIGN.md §3). A sphere light is sampled uniformly in the cone it subtends (intensity Le·Ω/(π·N)).
+`att(d) = c + l·d + q·d²` for point lights and att = 1 for directional ones. A spot light is a point light
+times its cone's falloff s² (`spot_falloff`). A light contributes nothing where N·L <= 0. An area light of
+radiance Le is sampled at `samples` stratified points; each sample y acts as a point light of intensity
+Le·cosθ_y·A / (π·r²·N), so that its diffuse part is Kd·E/π with E the irradiance the light delivers
+(DESIGN.md §3). A sphere light is sampled uniformly in the cone it subtends (intensity Le·Ω/(π·N)).
 
 With `shadows` set, each light sample is tested with a shadow ray: opaque objects block it, transparent ones
 let their kt through (`shadow_transmittance`); raycast passes False.
@@ -21,10 +22,13 @@ from .layout import (
     LIGHT_DISK,
     LIGHT_POINT,
     LIGHT_RECT,
+    LIGHT_SPOT,
     LS_AREA,
     LS_ATT_C,
     LS_ATT_L,
     LS_ATT_Q,
+    LS_COS_INNER,
+    LS_COS_OUTER,
     LS_RADIUS,
     LV_DIFFUSE,
     LV_DIRECTION,
@@ -69,21 +73,24 @@ def sample_light(lit, j, p, u1, u2):
 
     Returns (L, dist, w) with L the unit direction to the light, dist the distance to the sampled point (a large
     number for directional lights) and w the factor that scales the light's Id and Is for this sample
-    (1/att for point lights, 1 for directional, the equivalent-intensity factor for area lights; 0 if the
-    sample cannot light p).
+    (1/att for point lights, their cone's falloff/att for spot lights, 1 for directional, the equivalent-intensity
+    factor for area lights; 0 if the sample cannot light p).
     """
     kind = lit.light_kind[j]
     vecs = lit.light_vecs[j]
     sc = lit.light_scalars[j]
     if kind == LIGHT_DIRECTIONAL:
         return mul(row3(vecs, LV_DIRECTION), -1.0), config.T_FAR, 1.0
-    if kind == LIGHT_POINT:
+    if kind == LIGHT_POINT or kind == LIGHT_SPOT:
         to = sub(row3(vecs, LV_POSITION), p)
         dist = length(to)
         if dist == 0.0:
             return (0.0, 0.0, 1.0), 0.0, 0.0
         att = sc[LS_ATT_C] + sc[LS_ATT_L] * dist + sc[LS_ATT_Q] * dist * dist
-        return mul(to, 1.0 / dist), dist, 1.0 / att
+        L = mul(to, 1.0 / dist)
+        if kind == LIGHT_SPOT:
+            return L, dist, spot_factor(lit, j, L) / att
+        return L, dist, 1.0 / att
     if kind == LIGHT_RECT or kind == LIGHT_DISK:
         if kind == LIGHT_RECT:
             a, b = u1, u2
@@ -102,6 +109,32 @@ def sample_light(lit, j, p, u1, u2):
     # sphere light: uniform directions in the cone it subtends from p
     L, dist, solid_angle = sphere_cone(row3(vecs, LV_POSITION), sc[LS_RADIUS], p, u1, u2)
     return L, dist, solid_angle * _INV_PI
+
+
+@njit_inline
+def spot_falloff(cos_theta, cos_outer, cos_inner):
+    """The one spot-light falloff every method uses: s² with s = clamp((cosθ − cos angle)/(cos inner_angle −
+    cos angle), 0, 1) (glTF KHR_lights_punctual's recommended falloff, smoothed by squaring); a hard step
+    (1 where cosθ >= cos angle, else 0) when the two cones coincide (their cosines within SPOT_HARD_EDGE)."""
+    width = cos_inner - cos_outer
+    if width < config.SPOT_HARD_EDGE:
+        return 1.0 if cos_theta >= cos_outer else 0.0
+    s = (cos_theta - cos_outer) / width
+    if s <= 0.0:
+        return 0.0
+    if s >= 1.0:
+        return 1.0
+    return s * s
+
+
+@njit_inline
+def spot_factor(lit, j, L):
+    """The falloff of spot light j towards a point that sees it along the unit direction L (from the point to
+    the light): cosθ = dot(axis, −L)."""
+    vecs = lit.light_vecs[j]
+    sc = lit.light_scalars[j]
+    cos_theta = -(vecs[LV_DIRECTION, 0] * L[0] + vecs[LV_DIRECTION, 1] * L[1] + vecs[LV_DIRECTION, 2] * L[2])
+    return spot_falloff(cos_theta, sc[LS_COS_OUTER], sc[LS_COS_INNER])
 
 
 @njit_inline
@@ -146,8 +179,8 @@ def phong(n, L, V, mat, Id, Is, w):
 
 
 #: Columns of `illuminate_terms`' per-light record.
-PL_DIFFUSE, PL_SPECULAR, PL_SHADOW, PL_COS, PL_LIT = 0, 3, 6, 9, 10
-PER_LIGHT_SIZE = 11
+PL_DIFFUSE, PL_SPECULAR, PL_SHADOW, PL_COS, PL_LIT, PL_SPOT = 0, 3, 6, 9, 10, 11
+PER_LIGHT_SIZE = 12
 
 
 @njit_inline
@@ -207,7 +240,7 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
     nothing else. With `log_base` >= 0, rows log_base + j of `per_light` (float64 (m, PER_LIGHT_SIZE)) receive
     light j's share (`lumos.explain`; with −1, any float64 2-D array, never touched): PL_DIFFUSE, PL_SPECULAR (rgb, shadowed), PL_SHADOW (the mean transmittance of its
     samples, 0 for samples behind the surface), PL_COS (the mean N·L over its samples), PL_LIT (how many of its
-    samples face the surface and are not blocked).
+    samples face the surface and are not blocked), PL_SPOT (spot lights: the falloff of their cone towards p).
     """
     log = log_base >= 0
     if log:  # (element by element: a device function makes no array views, see kernels.jit)
@@ -232,6 +265,8 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
                                        rand01(seed, pixel, sample, dim + 1))
                 dim += 2
             L, dist, w = sample_light(lit, j, p, u1, u2)
+            if log and lit.light_kind[j] == LIGHT_SPOT:
+                per_light[log_base + j, PL_SPOT] += spot_factor(lit, j, L) * inv_n
             if w == 0.0 or dot(n, L) <= 0.0:
                 continue
             tr, tg, tb = 1.0, 1.0, 1.0

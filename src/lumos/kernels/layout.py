@@ -47,29 +47,34 @@ MAT_TEXTURE = 21  # row in tex_info of the material's texture, or -1
 MAT_BUMP = 22  # row in tex_info of its bump map, or -1
 MAT_SIZE = 24
 
-# Light kinds and columns
+# Light kinds and columns. Kinds up to LIGHT_DIRECTIONAL are delta lights (one direction per shading point, no
+# random samples); the kinds above them are area lights.
 LIGHT_POINT = 0
-LIGHT_DIRECTIONAL = 1
-LIGHT_RECT = 2
-LIGHT_DISK = 3
-LIGHT_SPHERE = 4
+LIGHT_SPOT = 1  # a point light limited to a cone (see illumination.spot_falloff)
+LIGHT_DIRECTIONAL = 2
+LIGHT_RECT = 3
+LIGHT_DISK = 4
+LIGHT_SPHERE = 5
 
 # light_vecs: float64 (n, 6, 3)
-LV_POSITION = 0  # point position; rect corner; disk/sphere centre
-LV_DIRECTION = 1  # directional: unit direction of travel; rect/disk: unit normal
+LV_POSITION = 0  # point/spot position; rect corner; disk/sphere centre
+LV_DIRECTION = 1  # directional: unit direction of travel; spot: unit axis it shines along; rect/disk: unit normal
 LV_EDGE_U = 2  # rect: edge_u; disk: radius * first tangent
 LV_EDGE_V = 3  # rect: edge_v; disk: radius * second tangent
-LV_DIFFUSE = 4  # Id (point/directional) or radiance Le (area)
-LV_SPECULAR = 5  # Is (point/directional) or radiance Le (area)
-# light_scalars: float64 (n, 5)
-LS_ATT_C = 0
+LV_DIFFUSE = 4  # Id (point/spot/directional) or radiance Le (area)
+LV_SPECULAR = 5  # Is (point/spot/directional) or radiance Le (area)
+# light_scalars: float64 (n, LS_SIZE)
+LS_ATT_C = 0  # point/spot: attenuation [c, l, q]
 LS_ATT_L = 1
 LS_ATT_Q = 2
-LS_RADIUS = 3
-LS_AREA = 4
+LS_RADIUS = 3  # disk/sphere
+LS_AREA = 4  # area lights
+LS_COS_OUTER = 5  # spot: cos(angle), no light where cosθ < it
+LS_COS_INNER = 6  # spot: cos(inner_angle), full intensity where cosθ >= it
+LS_SIZE = 7
 
 # Emitters of the path tracer (`Emitters`): every light and every emissive primitive, picked by power
-EMIT_LIGHT = 0  # a scene light (point, directional or area; its light_kind says which); emit_ref: light index
+EMIT_LIGHT = 0  # a scene light (point, spot, directional or area; its light_kind says which); emit_ref: light index
 EMIT_TRIANGLE = 1  # an emissive triangle, sampled uniformly by area; emit_ref: triangle index
 EMIT_SHAPE = 2  # an emissive analytic shape, sampled by area (see kernels.emitters); emit_ref: shape index
 EMIT_SPHERE = 3  # an emissive sphere of uniform scale, sampled in the cone it subtends; emit_ref: shape index
@@ -89,6 +94,13 @@ CAM_SIZE = 5
 NODE_FIRST = 6
 NODE_COUNT = 7
 
+# The 4-wide tree that traversal walks (built from the binary one, `compile.bvh.wide_nodes`): 128 bytes per node,
+# on 64-byte boundaries. Float32 columns 0-23: six bound rows (min x, y, z, max x, y, z) of the four children's
+# values each, as `kernels.simd.box4_test` loads them; int32 columns WIDE_CHILD..+3: each child's wide node index
+# or first prim_ref entry; WIDE_COUNT..+3: its leaf primitive count (0: a wide node; -1: an empty slot).
+WIDE_CHILD = 24
+WIDE_COUNT = 28
+
 SceneArrays = namedtuple(
     "SceneArrays",
     [
@@ -102,12 +114,14 @@ SceneArrays = namedtuple(
         "prim_ref",  # int32 (np,): BVH leaf order -> triangle (>= 0) or ~shape (< 0)
         "node_box",  # float32 (nn, 8): min xyz, max xyz in columns 0-5 (columns 6-7 hold the link bits)
         "node_link",  # int32 (nn, 8): an int32 view of node_box; columns NODE_FIRST, NODE_COUNT
+        "wide_nodes",  # float32 (nw, 32): the 4-wide tree, see WIDE_*
+        "wide_link",  # int32 (nw, 32): an int32 view of wide_nodes
         "unbounded",  # int32 (nu,): shapes tested outside the BVH
         "materials",  # float64 (nm, MAT_SIZE)
         "light_kind",  # int32 (nl,)
         "light_samples",  # int32 (nl,)
         "light_vecs",  # float64 (nl, 6, 3)
-        "light_scalars",  # float64 (nl, 5)
+        "light_scalars",  # float64 (nl, LS_SIZE)
         "ambient",  # float64 (3,)
         "background",  # float64 (3,)
         "csg_nodes",  # int32 (nc, 4): see kernels.csg
@@ -124,7 +138,8 @@ SceneArrays = namedtuple(
 #: What traversal needs (closest_hit, any_hit).
 Geometry = namedtuple(
     "Geometry",
-    ["node_box", "node_link", "prim_ref", "tri_verts", "shape_xform", "shape_info", "unbounded", "csg_nodes"],
+    ["node_box", "node_link", "prim_ref", "tri_verts", "shape_xform", "shape_info", "unbounded", "csg_nodes",
+     "wide_nodes", "wide_link"],
 )
 #: What turns a hit into a surface (surface_at).
 Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_info", "shape_xform", "shape_info"])

@@ -1,4 +1,4 @@
-"""The radiosity solvers' kernels: the light point and directional lights deliver, form factors by ray casting
+"""The radiosity solvers' kernels: the light point, spot and directional lights deliver, form factors by ray casting
 (a progressive shot, a row of the matrix), and Monte Carlo shooting.
 
 All work in radiance (a Lambertian patch's radiosity is B = π·L), on `layout.PatchArrays` `pa`, with the
@@ -22,7 +22,7 @@ from .camera import camera_ray
 from .illumination import sample_light
 from .optics import reflect, refract, schlick
 from .jit import njit, njit_alloc, njit_inline, njit_parallel, prange
-from .layout import INFO_OBJECT, LIGHT_DIRECTIONAL, LV_DIFFUSE
+from .layout import LIGHT_DIRECTIONAL, LV_DIFFUSE
 from .rng import rand2_key, rand_key, sample_key
 from .sampling import stratified_2d
 from .surface import offset_origin
@@ -48,7 +48,7 @@ def _lifted(pa, i):
 
 @njit_parallel
 def direct_light(sa, lights_sa, pa, samples, seed, out, rays_out):
-    """out (n, 3) += ρ·E/π of every point and directional light (`lights_sa`: the scene's lighting arrays, the
+    """out (n, 3) += ρ·E/π of every point, spot and directional light (`lights_sa`: the scene's lighting arrays, the
     patches' BVH in `sa`): E = π·I·cos θ/att(d) at `samples` stratified points of each patch, shadow rays to the
     light, averaged over the patch (DESIGN.md §3: a diffuse surface then shows ρ·I·cos θ/att, as in whitted)."""
     n = pa.area.shape[0]

@@ -1,17 +1,19 @@
 """BVH traversal: closest hit, any hit and shadow-ray transmittance, with a fixed stack supplied by the caller (one
 per thread/row).
 
-Children are stored next to each other: at an interior node both child boxes are tested, the nearer is visited
-first and the farther pushed with its entry distance, so a popped node is skipped once a closer hit is known.
-Unbounded shapes (planes) are tested before the tree. A csg object is one shape whose test (`kernels.csg`) also
-fills b1 and b2 of the hit record.
+The walk is over the 4-wide tree (`layout.WIDE_*`, collapsed from the binary SAH tree at compile time): at an
+interior node the four child boxes are tested at once with explicit SIMD (`simd.box4_test`), the children hit
+are pushed with their entry distances sorted so that the nearest is visited next, and a popped entry is skipped
+once a closer hit is known. A stack entry is a wide node index, or ~(4·node + slot) for a leaf child, whose
+primitives are tested in place. Unbounded shapes (planes) are tested before the tree. A csg object is one shape
+whose test (`kernels.csg`) also fills b1 and b2 of the hit record.
 """
 
 import numpy as np
 
 from .csg import intersect_csg, solid_span
-from .intersect import NO_HIT, box_setup, intersect_node_box, intersect_shape, intersect_triangle, triangle_setup
-from .jit import njit, njit_inline
+from .intersect import NO_HIT, box_setup, intersect_shape, intersect_triangle, triangle_setup
+from .jit import njit_inline
 from .layout import (
     FLAG_CAPPED,
     INFO_FLAGS,
@@ -19,14 +21,15 @@ from .layout import (
     INFO_LIGHT,
     INFO_MATERIAL,
     MAT_KT,
-    NODE_COUNT,
-    NODE_FIRST,
     SHAPE_BOX,
     SHAPE_CONE,
     SHAPE_CSG,
     SHAPE_CYLINDER,
     SHAPE_SPHERE,
+    WIDE_CHILD,
+    WIDE_COUNT,
 )
+from .simd import box4_test
 from .vec import xform_point, xform_vector
 
 #: Transmittance below which a shadow ray counts as blocked.
@@ -74,20 +77,42 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
         t, part, b1, b2 = _shape_hit(geo, s, o, d, t_min, best_t, time)
         if t != NO_HIT:
             best_t, best_ref, best_b1, best_b2, best_part, hit = t, ~s, b1, b2, part, True
-    box = geo.node_box
-    link = geo.node_link
-    if box.shape[0] > 0:
+    nodes = geo.wide_nodes
+    link = geo.wide_link
+    if nodes.shape[0] > 0:
         rb = box_setup(o, d)
+        ix, iy, iz, ox, oy, oz, nx, ny, nz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5], rb[6], rb[7], rb[8]
+        nx, ny, nz = 4 * nx, 4 * ny, 4 * nz  # box_setup's near column (0/3, 1/4, 2/5) -> the node's near row
         setup = _triangle_setup_if(geo, d)
-        node = np.int64(0)  # int64 throughout: a literal 0 or an int32 link would each compile another variant
+        node = np.int64(0)  # a wide node index (>= 0) or ~(4·node + slot) for a leaf child (int64 throughout)
         sp = 0
-        active = intersect_node_box(box, node, rb, best_t) != NO_HIT
-        while active:
-            count = link[node, NODE_COUNT]
-            if count > 0:
+        while True:
+            if node >= 0:
+                # interior: test the four child boxes at once; push the hit ones, nearest on top
+                mask, t0, t1, t2, t3 = box4_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, best_t)
+                base = sp
+                for k in range(4):
+                    if mask & (1 << k):
+                        tk = t0 if k == 0 else (t1 if k == 1 else (t2 if k == 2 else t3))
+                        ref = np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 \
+                            else ~(4 * node + k)
+                        # insertion into stack[base:sp] kept sorted by decreasing distance
+                        j = sp
+                        while j > base and stack_t[j - 1] < tk:
+                            stack[j], stack_t[j] = stack[j - 1], stack_t[j - 1]
+                            j -= 1
+                        stack[j], stack_t[j] = ref, tk
+                        sp += 1
+                if sp > base:
+                    sp -= 1
+                    node = stack[sp]
+                    continue
+            else:
                 # leaf: test its primitives
-                first = link[node, NODE_FIRST]
-                for k in range(first, first + count):
+                q = ~node
+                w = q >> 2
+                first = np.int64(link[w, WIDE_CHILD + (q & 3)])
+                for k in range(first, first + link[w, WIDE_COUNT + (q & 3)]):
                     r = geo.prim_ref[k]
                     if r >= 0:
                         t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, best_t)
@@ -97,34 +122,16 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
                         t, part, b1, b2 = _shape_hit(geo, np.int64(~r), o, d, t_min, best_t, time)
                         if t != NO_HIT:
                             best_t, best_ref, best_b1, best_b2, best_part, hit = t, r, b1, b2, part, True
-            else:
-                # interior: visit the nearer child, push the farther
-                c = np.int64(link[node, NODE_FIRST])
-                t_left = intersect_node_box(box, c, rb, best_t)
-                t_right = intersect_node_box(box, c + 1, rb, best_t)
-                if t_left != NO_HIT and t_right != NO_HIT:
-                    if t_left <= t_right:
-                        node = c
-                        stack[sp], stack_t[sp] = c + 1, t_right
-                    else:
-                        node = c + 1
-                        stack[sp], stack_t[sp] = c, t_left
-                    sp += 1
-                    continue
-                if t_left != NO_HIT:
-                    node = c
-                    continue
-                if t_right != NO_HIT:
-                    node = c + 1
-                    continue
             # pop the next node that may still hold a closer hit
-            active = False
+            found = False
             while sp > 0:
                 sp -= 1
                 if stack_t[sp] < best_t:
                     node = stack[sp]
-                    active = True
+                    found = True
                     break
+            if not found:
+                break
     if not hit:
         return NO_HIT, 0, 0.0, 0.0, 0
     return best_t, best_ref, best_b1, best_b2, best_part
@@ -207,21 +214,29 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
         tr, tg, tb = tr * f0, tg * f1, tb * f2
         if max(tr, tg, tb) < SHADOW_CUTOFF:
             return (0.0, 0.0, 0.0), True
-    box = geo.node_box
-    link = geo.node_link
-    if box.shape[0] == 0:
+    nodes = geo.wide_nodes
+    link = geo.wide_link
+    if nodes.shape[0] == 0:
         return (tr, tg, tb), True
     rb = box_setup(o, d)
+    ix, iy, iz, ox, oy, oz, nx, ny, nz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5], rb[6], rb[7], rb[8]
+    nx, ny, nz = 4 * nx, 4 * ny, 4 * nz
     setup = _triangle_setup_if(geo, d)
-    node = np.int64(0)
-    if intersect_node_box(box, node, rb, t_max) == NO_HIT:
-        return (tr, tg, tb), True
+    node = np.int64(0)  # as in closest_hit: a wide node, or ~(4·node + slot) for a leaf child
     sp = 0
     while True:
-        count = link[node, NODE_COUNT]
-        if count > 0:
-            first = link[node, NODE_FIRST]
-            for k in range(first, first + count):
+        if node >= 0:
+            mask, t0, t1, t2, t3 = box4_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_max)
+            for k in range(4):
+                if mask & (1 << k):
+                    stack[sp] = np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 \
+                        else ~(4 * node + k)
+                    sp += 1
+        else:
+            q = ~node
+            w = q >> 2
+            first = np.int64(link[w, WIDE_CHILD + (q & 3)])
+            for k in range(first, first + link[w, WIDE_COUNT + (q & 3)]):
                 r = geo.prim_ref[k]
                 if r >= 0:
                     t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)
@@ -235,18 +250,6 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
                 tr, tg, tb = tr * f0, tg * f1, tb * f2
                 if max(tr, tg, tb) < SHADOW_CUTOFF:
                     return (0.0, 0.0, 0.0), True
-        else:
-            c = np.int64(link[node, NODE_FIRST])
-            hit_left = intersect_node_box(box, c, rb, t_max) != NO_HIT
-            hit_right = intersect_node_box(box, c + 1, rb, t_max) != NO_HIT
-            if hit_left and hit_right:
-                node = c
-                stack[sp] = c + 1
-                sp += 1
-                continue
-            if hit_left or hit_right:
-                node = c if hit_left else c + 1
-                continue
         if sp == 0:
             return (tr, tg, tb), True
         sp -= 1

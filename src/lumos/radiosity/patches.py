@@ -219,11 +219,11 @@ def _points_inside_mesh(verts, tris, points) -> bool:
 
 
 def _viewpoints(scene, exclude: int) -> np.ndarray:
-    """Points from which light or the eye may be inside a solid: the camera, point lights, the centres of area
+    """Points from which light or the eye may be inside a solid: the camera, point and spot lights, the centres of area
     lights and of emissive objects (other than object `exclude`)."""
     pts = [np.asarray(scene.camera.position, np.float64)]
     for light in scene.lights:
-        if light.type == "point":
+        if light.type in ("point", "spot"):
             pts.append(np.asarray(light.position, np.float64))
         elif light.type == "area":
             if light.shape == "rect":

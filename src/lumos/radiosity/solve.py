@@ -136,7 +136,7 @@ def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
 
 
 def _first_light(compiled, recv, bvh, rs, seed):
-    """E of every element: its emission and the first bounce of point and directional lights; (E, rays)."""
+    """E of every element: its emission and the first bounce of point, spot and directional lights; (E, rays)."""
     from ..kernels.radiosity import direct_light
 
     n = len(recv.area)
@@ -146,8 +146,8 @@ def _first_light(compiled, recv, bvh, rs, seed):
         direct_light(bvh.arrays, compiled.arrays, recv, np.int64(rs.visibility_samples), np.int64(seed), first, rays)
     sent = recv.emission + first
     if not np.any(sent > 0):
-        raise LumosError("radiosity: nothing in the scene emits light (no area light, emissive object, point or "
-                         "directional light reaches a surface)")
+        raise LumosError("radiosity: nothing in the scene emits light (no area light, emissive object, point, spot "
+                         "or directional light reaches a surface)")
     return sent, int(rays.sum())
 
 

@@ -22,6 +22,7 @@ from .model import (
     Scene,
     Sphere,
     SphereLight,
+    SpotLight,
     Transform,
     Triangle,
 )

@@ -32,8 +32,9 @@ import yaml
 from pydantic import BaseModel, Tag, ValidationError
 
 from ..errors import LumosError, SceneError
+from ..io.models import MODEL_FORMATS
 from . import model as _model
-from .model import Mesh, Scene, UnknownMaterial
+from .model import Mesh, ModelInclude, Scene, UnknownMaterial
 
 SCENE_SUFFIXES = (".yaml", ".yml", ".json")
 _TOP_KEYS = ", ".join(Scene.model_fields)
@@ -54,19 +55,25 @@ def load_scene(source: str | os.PathLike | dict) -> Scene:
         name, path, lines, data = "scene", None, None, source
     elif isinstance(source, (str, os.PathLike)):
         name, path = os.fspath(source), Path(source).expanduser()
+        if path.suffix.lower() in MODEL_FORMATS:
+            return _model_scene(path, name)
         data, lines = _read_file(path, name)
     else:
         raise SceneError(f"load_scene() takes a file path or a dict, not {type(source).__name__}")
     if not isinstance(data, dict):
         raise SceneError(f"{_where(name, lines, ())}: the top level must be a mapping ({_TOP_KEYS}), "
                          f"got {_show(data)}")
+    folder = path.parent if path else Path.cwd()
+    included = []
+    data = _camera_from_file(data, folder, name, lines, included)
     try:
         scene = Scene.model_validate(data)
     except ValidationError as exc:
         raise SceneError(format_validation_error(exc, name, lines=lines, data=data)) from None
-    folder = path.parent if path else Path.cwd()
     _load_meshes(scene, folder, name, lines)
     _resolve_texture_files(scene, folder, name, lines)
+    _expand_models(scene, folder, name, lines, included)
+    scene._included = included
     if path is not None:
         scene._source = path
     return scene
@@ -93,8 +100,8 @@ def _read_file(path: Path, name: str) -> tuple[Any, dict]:
     if path.is_dir():
         raise SceneError(f"{name}: is a folder, not a scene file")
     if path.suffix.lower() not in SCENE_SUFFIXES:
-        raise SceneError(f"{name}: scene files must end in .yaml, .yml or .json (meshes go in a scene's "
-                         f"objects as type: mesh, file: ...)")
+        raise SceneError(f"{name}: scene files must end in .yaml, .yml or .json, and model files in "
+                         f"{', '.join(MODEL_FORMATS)}")
     try:
         raw = path.read_bytes()
     except FileNotFoundError:
@@ -284,6 +291,141 @@ def _mesh_reason(message: str, path: Path) -> str:
         return message[len(exact):]
     match = re.match(r"cannot read mesh '.*?': ", message)
     return _one_line(message[match.end():] if match else message)
+
+
+# ------------------------------------------------------------------------------------ model files (includes)
+
+
+def _import(path: Path, shown: str):
+    """`import_model(path)` with its warnings said, each prefixed by nothing (they name their file and line)."""
+    import warnings
+
+    from ..errors import LumosWarning
+    from ..io.models import import_model
+
+    try:
+        model = import_model(path)
+    except LumosError:
+        raise
+    except Exception as exc:  # a corrupt file can upset a parser in any way; it is still bad input
+        raise LumosError(f"{shown}: {type(exc).__name__}: {_one_line(str(exc))}") from None
+    for text in model.warnings:
+        warnings.warn(LumosWarning(_one_line(text)))
+    return model
+
+
+def _model_scene(path: Path, name: str) -> Scene:
+    """The scene `lumos render model.obj` renders: the model with a camera, lights and a method made up for it
+    (`lumos.scene.from_model`)."""
+    from .from_model import scene_from_model
+
+    if path.is_dir():
+        raise SceneError(f"{name}: is a folder, not a model file")
+    try:
+        model = _import(path, name)
+    except LumosError as exc:
+        raise SceneError(_one_line(str(exc))) from None
+    data, about = scene_from_model(model)
+    try:
+        scene = Scene.model_validate(data)
+    except ValidationError as exc:
+        raise SceneError(format_validation_error(exc, name, data=data)) from None
+    _resolve_texture_files(scene, path.parent, name, None)
+    n = len(model.objects)
+    scene._included = [f"{path.name}: {n} object{'s' if n != 1 else ''}, {len(model.materials)} materials; "
+                       f"made up: {about}"]
+    scene._source = path
+    return scene
+
+
+def _model_path(file: Any, folder: Path, where: str) -> Path:
+    if not isinstance(file, str) or not file:
+        raise SceneError(f"{where}: expected the path of a model file ({', '.join(MODEL_FORMATS)}), got {_show(file)}")
+    path = Path(file).expanduser()
+    return path if path.is_absolute() else folder / path
+
+
+def _read_model(file: str, folder: Path, where: str):
+    path = _model_path(file, folder, where)
+    try:
+        return _import(path, file)
+    except LumosError as exc:
+        reason = _one_line(str(exc))
+        for long in (str(path), str(path.resolve())):  # `<file>:<line>: ...` from the importer: the name as given
+            reason = reason.replace(long, file)
+        raise SceneError(f"{where}: {reason}") from None
+
+
+def _camera_from_file(data: dict, folder: Path, name: str, lines: Optional[dict], included: list) -> dict:
+    """`camera: {file: model.gltf, index: 0, ...}`: the file's camera `index`, with the other keys given
+    replacing its own. Returns `data` (a shallow copy when the camera was replaced)."""
+    camera = data.get("camera")
+    if not isinstance(camera, dict) or "file" not in camera:
+        return data
+    index = camera.get("index", 0)
+    if not isinstance(index, int) or isinstance(index, bool) or index < 0:
+        raise SceneError(f"{_where(name, lines, ('camera', 'index'))}: expected a camera number >= 0, "
+                         f"got {_show(index)}")
+    file = camera["file"]
+    model = _read_model(file, folder, _where(name, lines, ("camera", "file")))
+    if index >= len(model.cameras):
+        has = f"it has {len(model.cameras)} (0 to {len(model.cameras) - 1})" if model.cameras else "it has none"
+        at = ("camera", "index") if "index" in camera else ("camera", "file")
+        raise SceneError(f"{_where(name, lines, at)}: {file!r} has no camera {index} ({has})")
+    given = {k: v for k, v in camera.items() if k not in ("file", "index")}
+    included.append(f"camera: camera {index} of {file}" + (f", with {', '.join(given)} given" if given else ""))
+    return {**data, "camera": {**model.cameras[index], **given}}
+
+
+def _expand_models(scene: Scene, folder: Path, name: str, lines: Optional[dict], included: list) -> None:
+    """Replace every `type: model` object by the file's objects, and add its materials (and lights)."""
+    from .from_model import include_pieces, transform_light
+
+    if not any(isinstance(obj, ModelInclude) for obj in scene.objects):
+        return
+    objects, prefixes = [], set()
+    for i, obj in enumerate(scene.objects):
+        if not isinstance(obj, ModelInclude):
+            objects.append(obj)
+            continue
+        at = ("objects", i)
+        model = _read_model(obj.file, folder, _where(name, lines, at + ("file",)))
+        for key in obj.materials_override:
+            if key not in model.materials:
+                known = ", ".join(sorted(model.materials)) or "it has none"
+                raise SceneError(f"{_where(name, lines, at + ('materials_override', key))}: {obj.file!r} has no "
+                                 f"material {key!r} (its materials: {known})")
+        prefix = base = obj.name or Path(obj.file).name
+        n = 1
+        while prefix in prefixes or any(m.startswith(prefix + ":") for m in scene.materials):
+            n += 1
+            prefix = f"{base}#{n}"
+        prefixes.add(prefix)
+        matrix = obj.transform.to_matrix() if obj.transform is not None else None
+        overrides = {k: m.model_dump(include=m.model_fields_set) for k, m in obj.materials_override.items()}
+        materials, pieces = include_pieces(model, prefix, matrix, overrides, keep_materials=obj.material is None)
+        lights = [transform_light(light, matrix) if matrix is not None else light for light in model.lights]
+        part = {"materials": materials, "objects": pieces, "lights": lights if obj.lights else []}
+        where = f"{_where(name, lines, at + ('file',))}: {obj.file}"
+        try:
+            sub = Scene.model_validate(part)
+        except ValidationError as exc:
+            raise SceneError(format_validation_error(exc, where, data=part)) from None
+        _load_meshes(sub, folder, where, None)
+        _resolve_texture_files(types.SimpleNamespace(materials=sub.materials, objects=[]), folder, where, None)
+        if obj.material is not None:
+            for piece in sub.objects:
+                piece.material = obj.material
+        scene.materials.update(sub.materials)
+        scene.lights.extend(sub.lights)
+        objects.extend(sub.objects)
+        what = f"{len(sub.objects)} object{'s' if len(sub.objects) != 1 else ''}"
+        what += f", {len(sub.materials)} materials as '{prefix}:...'" if obj.material is None else ", its material"
+        what += f", {len(sub.lights)} lights" if obj.lights else ""
+        if obj.materials_override:
+            what += f" ({', '.join(obj.materials_override)} overridden)"
+        included.append(f"{format_path(at)}: {obj.file}: {what}")
+    scene.objects[:] = objects
 
 
 # ------------------------------------------------------------------------------- pydantic errors -> one line

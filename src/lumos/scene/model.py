@@ -583,11 +583,32 @@ class Csg(ObjectBase):
 Solid = Annotated[Union[Sphere, Box, Cylinder, Cone, Mesh, Csg], Field(discriminator="type")]
 Csg.model_rebuild()
 
+
+class ModelInclude(ObjectBase):
+    """A model file (OBJ+MTL, glTF, GLB, PLY, STL, OFF) included as objects. The loader expands it into the
+    file's meshes, with `transform` applied after their own, and its materials, named `<name or file name>:<the
+    file's name>`: `materials_override` merges keys over a file's material, `material` replaces them all;
+    `lights: true` adds the file's lights (moved by `transform`). Paths are relative to the scene file."""
+
+    type: Literal["model"]
+    file: str
+    materials_override: dict[str, Material] = Field(default_factory=dict)
+    lights: bool = False
+
+    @model_validator(mode="after")
+    def _check(self):
+        if any(self.motion):
+            raise ValueError("motion: a model's meshes cannot move (motion blur takes analytic shapes)")
+        if self.material is not None and self.materials_override:
+            raise ValueError("give material (replaces every material of the file) or materials_override, not both")
+        return self
+
+
 Object = Annotated[
-    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Rect, Triangle, Mesh, Csg],
+    Union[Sphere, Plane, Box, Cylinder, Cone, Disk, Rect, Triangle, Mesh, Csg, ModelInclude],
     Field(discriminator="type"),
 ]
-OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "rect", "triangle", "mesh", "csg")
+OBJECT_TYPES = ("sphere", "plane", "box", "cylinder", "cone", "disk", "rect", "triangle", "mesh", "csg", "model")
 
 # ---------------------------------------------------------------------------------------------------- lights
 
@@ -608,8 +629,9 @@ class _LocalLight(StrictModel):
         return self.specular if self.specular is not None else self.intensity
 
 
-class PointLight(_LocalLight):
-    type: Literal["point"]
+class _PositionedLight(_LocalLight):
+    """A light at a point, dimmed by distance: `att(d) = c + l·d + q·d²` from `attenuation: [c, l, q]`."""
+
     position: Vec3
     attenuation: tuple[NonNegative, NonNegative, NonNegative] = (1.0, 0.0, 0.0)
 
@@ -622,6 +644,29 @@ class PointLight(_LocalLight):
     def _check(self):
         if sum(self.attenuation) <= 0:
             raise ValueError("attenuation [c, l, q] must not be all zero")
+        return self
+
+
+class PointLight(_PositionedLight):
+    """Shines equally in every direction."""
+
+    type: Literal["point"]
+
+
+class SpotLight(_PositionedLight):
+    """A point light limited to a cone about `direction`: full intensity within `inner_angle` of the axis, none
+    beyond `angle`, and between them the factor s² with s = (cosθ − cos angle)/(cos inner_angle − cos angle)
+    (glTF KHR_lights_punctual's recommended falloff; angles are half-angles in degrees)."""
+
+    type: Literal["spot"]
+    direction: Direction
+    angle: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False)] = 45.0
+    inner_angle: Annotated[float, Field(ge=0, le=90, allow_inf_nan=False)] = 0.0
+
+    @model_validator(mode="after")
+    def _check_cone(self):
+        if self.inner_angle > self.angle:
+            raise ValueError(f"inner_angle ({self.inner_angle:g}) must not exceed angle ({self.angle:g})")
         return self
 
 
@@ -683,6 +728,7 @@ def _light_tag(value: Any) -> Optional[str]:
 Light = Annotated[
     Union[
         Annotated[PointLight, Tag("point")],
+        Annotated[SpotLight, Tag("spot")],
         Annotated[DirectionalLight, Tag("directional")],
         Annotated[RectLight, Tag("area.rect")],
         Annotated[DiskLight, Tag("area.disk")],
@@ -691,10 +737,12 @@ Light = Annotated[
     Discriminator(
         _light_tag,
         custom_error_type="light_type",
-        custom_error_message="lights need type: point, directional or area (area needs shape: rect, disk or sphere)",
+        custom_error_message=(
+            "lights need type: point, spot, directional or area (area needs shape: rect, disk or sphere)"
+        ),
     ),
 ]
-LIGHT_TYPES = ("point", "directional", "area")
+LIGHT_TYPES = ("point", "spot", "directional", "area")
 
 # ----------------------------------------------------------------------------------------------------- scene
 
@@ -710,6 +758,8 @@ class Scene(StrictModel):
     materials: dict[str, Material] = Field(default_factory=dict)
     objects: list[Object] = Field(default_factory=list)
     _source: Optional[Path] = PrivateAttr(default=None)
+    #: what the loader included from model files (`type: model`, a camera's `file`), one line each, for `lumos info`
+    _included: list = PrivateAttr(default_factory=list)
 
     @model_validator(mode="after")
     def _check_material_names(self):

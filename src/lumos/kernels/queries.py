@@ -1,0 +1,368 @@
+"""Kernels of the ray-query API (`lumos.RayCaster`): closest hits with their surface, every crossing of a ray,
+and camera rays for picked pixels. All are `prange` loops over chunks of rays, each chunk with its own fixed
+traversal stack and scratch buffers; each ray's answer depends on that ray alone (deterministic, any thread
+count), and the GIL is released.
+
+Every crossing (`crossings`): the ray's line is clipped to the scene's (padded) bounds [t0, t1], outside which
+it is outside every closed solid; the origin is moved to o + t0·d (so every crossing has t' >= 0 and one
+forward triangle test serves) and the BVH2 is walked in any order, collecting:
+
+    triangles                       each hit (t, object, face); the same crossing reported by two triangles
+                                    sharing an edge or vertex (same object, same side, |Δt| <= 1e-9·|t|) counts once
+    sphere, box, capped cyl/cone    both ends of the line's span through the solid (`csg.solid_span`), exact
+    open cylinder / cone            each root of the side quadric with 0 <= z <= 1
+    disk, rect, plane               the one crossing of its plane inside it
+    csg                             the boundary crossings of the combined solid, walked one after another with
+                                    `csg.intersect_csg` from t = −∞ (each gives its own in/out flag)
+
+sorted by t. "Entering" is exact for analytic solids and csg; on a closed mesh it is the Jordan parity swept
+from t0 (where the line is outside), so it does not depend on the winding of the faces; on open surfaces it is
+dot(d, n) < 0 for the surface's normal (a triangle's (v1 − v0) × (v2 − v0)).
+"""
+
+import numpy as np
+
+from .. import config
+from .camera import camera_ray_at
+from .csg import csg_leaf, intersect_csg, solid_span
+from .intersect import (
+    NO_HIT,
+    _quadratic_roots,
+    axial_quadratic,
+    box_setup,
+    intersect_node_box,
+    intersect_triangle,
+    triangle_setup,
+)
+from .jit import njit, njit_inline, njit_parallel, prange
+from .layout import (
+    FLAG_CAPPED,
+    INFO_FLAGS,
+    INFO_KIND,
+    INFO_OBJECT,
+    INFO_REF,
+    NODE_COUNT,
+    NODE_FIRST,
+    SHAPE_BOX,
+    SHAPE_CONE,
+    SHAPE_CSG,
+    SHAPE_CYLINDER,
+    SHAPE_DISK,
+    SHAPE_PLANE,
+    SHAPE_RECT,
+    SHAPE_SPHERE,
+)
+from .surface import surface_at
+from .traverse import closest_hit
+from .vec import xform_point, xform_vector
+from .views import geometry_of, surfaces_of
+
+_CHUNK = 256
+#: two triangle hits of one mesh on the same side closer than this (relative to |t|) are one crossing
+_SAME_T = 1e-9
+_FAR = 1e300
+#: crossing codes
+_ENTER = 1  # the crossing enters a solid (or, on an open surface, meets its front)
+_MESH = 2  # a triangle hit: its "entering" is decided by parity (closed meshes) after the sweep
+_DROP = 4  # a repeat of the crossing before it
+
+
+# ------------------------------------------------------------------------------------------- closest hits
+
+
+@njit_parallel
+def closest_kernel(sa, tri_prim, origins, directions, t_max, t_out, object_out, prim_out, point_out, normal_out,
+                   uv_out):
+    """Nearest hit of each ray (float64 (n, 3) origins and directions, t_max (n,)) with its surface: t_out (n,)
+    (inf on a miss), object_out / prim_out int64 (n,) (-1 on a miss), point_out / normal_out (n, 3) and uv_out
+    (n, 2) (NaN on a miss). The normal is the unit geometric normal, outward (not turned towards the ray)."""
+    n = origins.shape[0]
+    for c in prange((n + _CHUNK - 1) // _CHUNK):
+        geo, surf = geometry_of(sa), surfaces_of(sa)  # per task: parfor bodies cannot capture a namedtuple
+        stack = np.empty(config.BVH_STACK, np.int64)
+        stack_t = np.empty(config.BVH_STACK)
+        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
+            o = (origins[i, 0], origins[i, 1], origins[i, 2])
+            d = (directions[i, 0], directions[i, 1], directions[i, 2])
+            t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, t_max[i], stack, stack_t, 0.0)
+            if t == NO_HIT:
+                t_out[i] = np.inf
+                object_out[i] = -1
+                prim_out[i] = -1
+                for k in range(3):
+                    point_out[i, k] = np.nan
+                    normal_out[i, k] = np.nan
+                uv_out[i, 0] = np.nan
+                uv_out[i, 1] = np.nan
+                continue
+            p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
+            t_out[i] = t
+            object_out[i] = obj
+            prim_out[i] = _prim_of(sa, tri_prim, ref, part)
+            for k in range(3):
+                point_out[i, k] = p[k]
+                normal_out[i, k] = n_geo[k]
+            uv_out[i, 0] = u
+            uv_out[i, 1] = v
+
+
+@njit_inline
+def _prim_of(sa, tri_prim, ref, part):
+    """The primitive id of a hit: a triangle's face in its own mesh, a csg solid's number in its object, or an
+    analytic shape's part (box face 2·axis + max side; cylinder/cone 0 side, 1 base cap, 2 top cap; else 0)."""
+    if ref >= 0:
+        return np.int64(tri_prim[ref])
+    s = ~ref
+    if sa.shape_info[s, INFO_KIND] == SHAPE_CSG:
+        leaf, _ = csg_leaf(part)
+        root = np.int64(sa.shape_info[s, INFO_REF])
+        return np.int64(leaf - ~sa.csg_nodes[root + 1, 1])
+    return np.int64(part)
+
+
+# ------------------------------------------------------------------------------------------- every crossing
+
+
+@njit
+def _insert(ts, objs, prims, codes, n, t, obj, prim, code):
+    """Insert a crossing into the buffers (sorted by t, n held); returns the new n, or -1 when they are full."""
+    if n == ts.shape[0]:
+        return -1
+    k = n
+    while k > 0 and ts[k - 1] > t:
+        ts[k] = ts[k - 1]
+        objs[k] = objs[k - 1]
+        prims[k] = prims[k - 1]
+        codes[k] = codes[k - 1]
+        k -= 1
+    ts[k] = t
+    objs[k] = obj
+    prims[k] = prim
+    codes[k] = code
+    return n + 1
+
+
+@njit
+def _scene_span(bounds, o, d):
+    """(t0, t1) of the line o + t·d inside the box bounds (float64 (2, 3)); t0 > t1 when it misses."""
+    t0, t1 = -_FAR, _FAR
+    for a in range(3):
+        if d[a] == 0.0:
+            if o[a] < bounds[0, a] or o[a] > bounds[1, a]:
+                return 1.0, -1.0
+            continue
+        ta = (bounds[0, a] - o[a]) / d[a]
+        tb = (bounds[1, a] - o[a]) / d[a]
+        if ta > tb:
+            ta, tb = tb, ta
+        t0 = max(t0, ta)
+        t1 = min(t1, tb)
+    return t0, t1
+
+
+@njit
+def _shape_crossings(sa, geo, s, o, d, t0, ts, objs, prims, codes, n):
+    """Add every crossing of the line o + t·d (t relative to the moved origin; stored as t0 + t) with shape s;
+    returns n, or -1 when the buffers overflow."""
+    info = sa.shape_info[s]
+    kind = info[INFO_KIND]
+    obj = info[INFO_OBJECT]
+    m = sa.shape_xform[s]
+    if kind == SHAPE_CSG:
+        root = np.int64(info[INFO_REF])
+        first_leaf = ~np.int64(sa.csg_nodes[root + 1, 1])
+        t_prev = -_FAR
+        while n >= 0:
+            t, part, b1, b2 = intersect_csg(geo, s, o, d, t_prev, _FAR)
+            if t == NO_HIT:
+                break
+            leaf, _ = csg_leaf(part)
+            n = _insert(ts, objs, prims, codes, n, t0 + t, obj, leaf - first_leaf, _ENTER if b1 > 0.0 else 0)
+            t_prev = t
+        return n
+    oc = xform_point(m, o)
+    dc = xform_vector(m, d)
+    capped = (info[INFO_FLAGS] & FLAG_CAPPED) != 0
+    if kind == SHAPE_SPHERE or kind == SHAPE_BOX or ((kind == SHAPE_CYLINDER or kind == SHAPE_CONE) and capped):
+        t_in, p_in, t_out, p_out = solid_span(kind, oc, dc)
+        if t_in < t_out:
+            n = _insert(ts, objs, prims, codes, n, t0 + t_in, obj, p_in, _ENTER)
+            if n >= 0:
+                n = _insert(ts, objs, prims, codes, n, t0 + t_out, obj, p_out, 0)
+        return n
+    if kind == SHAPE_CYLINDER or kind == SHAPE_CONE:  # open: the side surface between z = 0 and z = 1
+        cone = kind == SHAPE_CONE
+        a, half_b, c = axial_quadratic(oc, dc, cone)
+        r0, r1 = _quadratic_roots(a, half_b, c)
+        for j in range(2):
+            t = r0 if j == 0 else r1
+            if not (t == t) or (j == 1 and r1 == r0):  # no root (nan), or the single root of a linear case
+                continue
+            p = (oc[0] + t * dc[0], oc[1] + t * dc[1], oc[2] + t * dc[2])
+            if 0.0 <= p[2] <= 1.0:
+                nz = 1.0 - p[2] if cone else 0.0
+                front = p[0] * dc[0] + p[1] * dc[1] + nz * dc[2] < 0.0
+                n = _insert(ts, objs, prims, codes, n, t0 + t, obj, 0, _ENTER if front else 0)
+                if n < 0:
+                    return n
+        return n
+    if kind == SHAPE_DISK or kind == SHAPE_RECT or kind == SHAPE_PLANE:
+        if dc[2] == 0.0:
+            return n
+        t = -oc[2] / dc[2]
+        x = oc[0] + t * dc[0]
+        y = oc[1] + t * dc[1]
+        if kind == SHAPE_DISK and x * x + y * y > 1.0:
+            return n
+        if kind == SHAPE_RECT and not (0.0 <= x <= 1.0 and 0.0 <= y <= 1.0):
+            return n
+        return _insert(ts, objs, prims, codes, n, t0 + t, obj, 0, _ENTER if dc[2] < 0.0 else 0)
+    return n
+
+
+@njit
+def _triangle_crossing(sa, tri_prim, o, setup, d, r, t0, t_far, ts, objs, prims, codes, n):
+    t, b1, b2 = intersect_triangle(o, setup, sa.tri_verts, r, t_far)
+    if t == NO_HIT:
+        return n
+    v = sa.tri_verts
+    v0 = (np.float64(v[r, 0]), np.float64(v[r, 1]), np.float64(v[r, 2]))
+    e1 = (v[r, 3] - v0[0], v[r, 4] - v0[1], v[r, 5] - v0[2])
+    e2 = (v[r, 6] - v0[0], v[r, 7] - v0[1], v[r, 8] - v0[2])
+    dn = ((e1[1] * e2[2] - e1[2] * e2[1]) * d[0] + (e1[2] * e2[0] - e1[0] * e2[2]) * d[1]
+          + (e1[0] * e2[1] - e1[1] * e2[0]) * d[2])
+    code = _MESH | (_ENTER if dn < 0.0 else 0)
+    return _insert(ts, objs, prims, codes, n, t0 + t, sa.tri_info[r, INFO_OBJECT], tri_prim[r], code)
+
+
+@njit
+def _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack):
+    """Every crossing of the line through o along d (module doc), sorted by t: returns n, or -1 on overflow."""
+    n = 0
+    t0, t1 = _scene_span(bounds, o, d)
+    if not (t0 <= t1):
+        t0, t1 = 0.0, -1.0  # the line misses every bounded primitive: only planes remain
+    om = (o[0] + t0 * d[0], o[1] + t0 * d[1], o[2] + t0 * d[2])  # the moved origin
+    for k in range(sa.unbounded.shape[0]):
+        n = _shape_crossings(sa, geo, np.int64(sa.unbounded[k]), om, d, t0, ts, objs, prims, codes, n)
+        if n < 0:
+            return n
+    if sa.node_box.shape[0] == 0 or t1 < t0:
+        return n
+    t_far = (t1 - t0) * (1.0 + 1e-9) + 1e-300
+    box = sa.node_box
+    link = sa.node_link
+    rb = box_setup(om, d)
+    setup = triangle_setup(d)
+    node = np.int64(0)
+    if intersect_node_box(box, node, rb, t_far) == NO_HIT:
+        return n
+    sp = 0
+    while True:
+        count = link[node, NODE_COUNT]
+        if count > 0:
+            first = link[node, NODE_FIRST]
+            for k in range(first, first + count):
+                r = sa.prim_ref[k]
+                if r >= 0:
+                    n = _triangle_crossing(sa, tri_prim, om, setup, d, r, t0, t_far, ts, objs, prims, codes, n)
+                else:
+                    n = _shape_crossings(sa, geo, np.int64(~r), om, d, t0, ts, objs, prims, codes, n)
+                if n < 0:
+                    return n
+        else:
+            c = np.int64(link[node, NODE_FIRST])
+            hit_left = intersect_node_box(box, c, rb, t_far) != NO_HIT
+            hit_right = intersect_node_box(box, c + 1, rb, t_far) != NO_HIT
+            if hit_left and hit_right:
+                node = c
+                stack[sp] = c + 1
+                sp += 1
+                continue
+            if hit_left or hit_right:
+                node = c if hit_left else c + 1
+                continue
+        if sp == 0:
+            return n
+        sp -= 1
+        node = stack[sp]
+
+
+@njit
+def _settle_meshes(ts, objs, codes, n, closed, state):
+    """Drop repeated triangle hits and decide "entering" on closed meshes by parity (state: int8 per object,
+    all 0 on entry and on return)."""
+    for k in range(n):
+        if (codes[k] & _MESH) == 0:
+            continue
+        tol = _SAME_T * max(abs(ts[k]), 1e-300)
+        j = k - 1
+        while j >= 0 and ts[k] - ts[j] <= tol:
+            if (objs[j] == objs[k] and (codes[j] & _MESH) != 0 and (codes[j] & _DROP) == 0
+                    and (codes[j] & _ENTER) == (codes[k] & _ENTER)):
+                codes[k] |= _DROP
+                break
+            j -= 1
+        if (codes[k] & _DROP) != 0 or closed[objs[k]] == 0:
+            continue
+        entering = state[objs[k]] == 0
+        state[objs[k]] ^= 1
+        codes[k] = (codes[k] & ~_ENTER) | (_ENTER if entering else 0)
+    for k in range(n):
+        state[objs[k]] = 0
+
+
+@njit_parallel
+def crossings(sa, tri_prim, closed, bounds, origins, directions, t_min, t_max, cap, max_hits, t_out, object_out,
+              prim_out, enter_out, count_out, total_out):
+    """Every crossing with t_min[i] < t < t_max[i] of each ray (module doc), sorted by t: the first max_hits of
+    ray i in row i of t_out (n, max_hits) float64, object_out / prim_out int32, enter_out bool; count_out[i]
+    (int64) of them are set, total_out[i] is how many there were in range, or -1 when the line crosses more
+    than `cap` boundaries in the scene's box (call again with a larger cap). `closed` int8 (objects,): 1 for a
+    closed mesh (parity decides entering). `bounds` float64 (2, 3): the padded scene bounds."""
+    n = origins.shape[0]
+    for c in prange((n + _CHUNK - 1) // _CHUNK):
+        geo = geometry_of(sa)
+        stack = np.empty(config.BVH_STACK, np.int64)
+        ts = np.empty(cap)
+        objs = np.empty(cap, np.int32)
+        prims = np.empty(cap, np.int32)
+        codes = np.empty(cap, np.int8)
+        state = np.zeros(closed.shape[0], np.int8)
+        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
+            o = (origins[i, 0], origins[i, 1], origins[i, 2])
+            d = (directions[i, 0], directions[i, 1], directions[i, 2])
+            m = _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack)
+            count_out[i] = 0
+            if m < 0:
+                total_out[i] = -1
+                continue
+            _settle_meshes(ts, objs, codes, m, closed, state)
+            got = 0
+            total = 0
+            for k in range(m):
+                if (codes[k] & _DROP) != 0 or not (t_min[i] < ts[k] < t_max[i]):
+                    continue
+                if got < max_hits:
+                    t_out[i, got] = ts[k]
+                    object_out[i, got] = objs[k]
+                    prim_out[i, got] = prims[k]
+                    enter_out[i, got] = (codes[k] & _ENTER) != 0
+                    got += 1
+                total += 1
+            count_out[i] = got
+            total_out[i] = total
+
+
+# ------------------------------------------------------------------------------------------- camera rays
+
+
+@njit_parallel
+def camera_rays_kernel(cam_vecs, cam_params, width, height, fx, fy, origins_out, directions_out):
+    """The rays through image points (fx[i], fy[i]) in pixel units (pixel (x, y)'s centre is (x + 0.5, y + 0.5)),
+    through the centre of the lens: origins_out, directions_out float64 (n, 3), unit directions."""
+    for i in prange(fx.shape[0]):
+        o, d = camera_ray_at(cam_vecs, cam_params, width, height, fx[i], fy[i], 0.5, 0.5)
+        for k in range(3):
+            origins_out[i, k] = o[k]
+            directions_out[i, k] = d[k]
