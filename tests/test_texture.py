@@ -44,7 +44,7 @@ def textures(rows, image=None):
     """A `layout.Textures` view over tex_info `rows` and one image (H, W, 3), top row first, stored bottom first."""
     pixels = np.zeros((0, 3), np.float32) if image is None else image[::-1].reshape(-1, 3)
     return L.Textures(np.ascontiguousarray(np.array(rows, dtype=np.float64).reshape(-1, T.TEX_SIZE)),
-                      np.ascontiguousarray(pixels, dtype=np.float32))
+                      np.ascontiguousarray(pixels, dtype=np.float32), np.zeros((0, 12), np.float32))
 
 
 def lookup(tex, row, u, v):
@@ -71,6 +71,7 @@ def material(ka=(0.1, 0.2, 0.3), kd=(0.4, 0.5, 0.6), ks=(0.7, 0.8, 0.9), kr=(0.1
     row[L.MAT_KS : L.MAT_KS + 3] = ks
     row[L.MAT_KR : L.MAT_KR + 3] = kr
     row[L.MAT_TEXTURE] = texture
+    row[L.MAT_TEXTURE_COUNT] = 0 if texture < 0 else 1
     row[L.MAT_BUMP] = bump
     return row
 

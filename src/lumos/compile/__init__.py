@@ -122,7 +122,8 @@ def _mesh_triangles(obj, world_from_object):
     tri_v = m.vertices[faces].reshape(-1, 9)
     tri_n = None if m.normals is None else m.normals[faces].reshape(-1, 9)
     tri_uv = None if m.uvs is None else m.uvs[faces].reshape(-1, 6)
-    return tri_v, tri_n, tri_uv
+    tri_t = None if m.tangents is None else m.tangents[faces].reshape(-1, 12)
+    return tri_v, tri_n, tri_uv, tri_t
 
 
 def _lights(scene, materials: _Materials, emitters: list):
@@ -213,7 +214,8 @@ def compile_scene(scene, settings=None) -> CompiledScene:
             if any(obj.motion):
                 raise LumosError(f"objects[{object_id}].motion: {obj.type} objects cannot move (motion blur is "
                                  "for spheres, boxes, cylinders, cones, disks, rects, planes and csg objects)")
-            tri_parts.append((*_mesh_triangles(obj, world_from_object), mat, object_id))
+            tri_v, tri_n, tri_uv, tri_t = _mesh_triangles(obj, world_from_object)
+            tri_parts.append((tri_v, tri_n, tri_uv, mat, object_id, tri_t))
             continue
         if obj.type == "csg":
             from .csg import add_csg
@@ -244,8 +246,24 @@ def compile_scene(scene, settings=None) -> CompiledScene:
 
         rows = physical_materials(_material_names(scene, materials), compiled.arrays.materials)
         compiled.arrays = compiled.arrays._replace(materials=rows)
-        compiled.emitters = build_emitters(compiled.arrays, compiled.bounds)
+        # emitters whose emission is textured are left to the BSDF rays (light sampling would need the texture
+        # at the sampled point): the table is built as if they did not emit
+        untextured = rows.copy()
+        untextured[_textured_emission(rows, compiled.arrays.tex_info), L.MAT_EMISSION : L.MAT_EMISSION + 3] = 0.0
+        compiled.emitters = build_emitters(compiled.arrays._replace(materials=untextured), compiled.bounds)
     return compiled
+
+
+def _textured_emission(rows: np.ndarray, tex_info: np.ndarray) -> np.ndarray:
+    """bool (n,): which material rows have a texture applied to their emission."""
+    from ..kernels.texture import APPLY_EMISSION, TEX_APPLY
+
+    out = np.zeros(len(rows), bool)
+    for i, row in enumerate(rows):
+        first, count = int(row[L.MAT_TEXTURE]), int(row[L.MAT_TEXTURE_COUNT])
+        if first >= 0:
+            out[i] = any(int(tex_info[k, TEX_APPLY]) & APPLY_EMISSION for k in range(first, first + count))
+    return out
 
 
 def _material_names(scene, materials: _Materials) -> list[str]:
@@ -281,7 +299,7 @@ def _compile_raster(scene, settings) -> CompiledScene:
 
 def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False) -> CompiledScene:
     light_kind, light_samples, light_vecs, light_scalars = lights
-    tri_verts, tri_normals, tri_uvs, tri_info = _concat_triangles(tri_parts)
+    tri_verts, tri_normals, tri_uvs, tri_info, tri_tangents = _concat_triangles(tri_parts)
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
     shape_info = np.array(shapes.infos, dtype=np.int32).reshape(-1, L.SHAPE_INFO_SIZE)
     shape_xform = np.array(shapes.xforms, dtype=np.float64).reshape(-1, 4, 4)
@@ -342,6 +360,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
         csg_nodes=np.asarray(getattr(shapes, "csg_nodes", np.zeros((0, 4), np.int32)), np.int32).reshape(-1, 4),
         tex_info=tex_info,
         tex_pixels=tex_pixels,
+        tri_tangents=_tangent_rows(tri_tangents[tri_order], solid_tris[4]),
     )
     if len(prim_bounds):
         bounds = np.array([prim_bounds[:, :3].min(axis=0), prim_bounds[:, 3:].max(axis=0)])
@@ -366,18 +385,33 @@ def triangle_arrays(tri_verts: np.ndarray, tri_ids: np.ndarray) -> CompiledScene
 
 
 def _concat_triangles(parts):
+    """parts: (verts, normals, uvs, material, object[, tangents]) → tri_verts, tri_normals, tri_uvs, tri_info and
+    the tangents float32 (m, 12) (zeros where a part has none)."""
     if not parts:
         return (np.zeros((0, 9), np.float32), np.zeros((0, 9), np.float32), np.zeros((0, 6), np.float32),
-                np.zeros((0, 5), np.int32))
-    verts, normals, uvs, infos = [], [], [], []
-    for v, n, uv, mat, obj in parts:
+                np.zeros((0, 5), np.int32), np.zeros((0, 12), np.float32))
+    verts, normals, uvs, infos, tangents = [], [], [], [], []
+    for v, n, uv, mat, obj, *rest in parts:
+        t = rest[0] if rest else None
         m = len(v)
         verts.append(v.astype(np.float32))
         normals.append(np.zeros((m, 9), np.float32) if n is None else n.astype(np.float32))
         uvs.append(np.zeros((m, 6), np.float32) if uv is None else uv.astype(np.float32))
-        flags = (L.FLAG_NORMALS if n is not None else 0) | (L.FLAG_UVS if uv is not None else 0)
+        tangents.append(np.zeros((m, 12), np.float32) if t is None else t.astype(np.float32))
+        flags = ((L.FLAG_NORMALS if n is not None else 0) | (L.FLAG_UVS if uv is not None else 0)
+                 | (L.FLAG_TANGENTS if t is not None else 0))
         info = np.empty((m, 5), np.int32)
         info[:] = (0, mat, 0, flags, -1)
         info[:, L.INFO_OBJECT] = obj  # one object id, or one per triangle
         infos.append(info)
-    return np.concatenate(verts), np.concatenate(normals), np.concatenate(uvs), np.concatenate(infos)
+    return (np.concatenate(verts), np.concatenate(normals), np.concatenate(uvs), np.concatenate(infos),
+            np.concatenate(tangents))
+
+
+def _tangent_rows(*parts) -> np.ndarray:
+    """tri_tangents: the parts' rows concatenated, or (0, 12) when no triangle has tangents (no memory spent on
+    meshes without them)."""
+    rows = np.concatenate(parts)
+    if not np.any(rows):
+        return np.zeros((0, 12), np.float32)
+    return np.ascontiguousarray(rows, dtype=np.float32)

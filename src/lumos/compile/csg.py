@@ -79,7 +79,7 @@ class _Builder:
         if obj.type == "mesh":
             from . import _mesh_triangles
 
-            verts, _, uvs = _mesh_triangles(obj, world_from_object)
+            verts, _, uvs, _ = _mesh_triangles(obj, world_from_object)
             _check_closed(verts, where)
             solid = self.shapes.solid_triangles
             first = sum(len(part[0]) for part in solid)  # relative to the solid triangles; _assemble adds the rest

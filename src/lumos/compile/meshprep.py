@@ -23,6 +23,7 @@ class PreparedMesh:
     uvs: Optional[np.ndarray]  # (n, 2) float64 or None
     polygons: Union[np.ndarray, list]  # (m, 3) int64 triangles, or (keep_polygons) a list of index arrays
     groups: Optional[np.ndarray]  # triangles: the polygon each came from (flat shading shades a polygon once)
+    tangents: Optional[np.ndarray] = None  # (n, 4) float64 world-space tangent xyz + handedness w, or None
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -37,15 +38,21 @@ def prepare_mesh(obj, world_from_object: Optional[np.ndarray], keep_polygons: bo
         verts = np.array(obj.vertices, dtype=np.float64)
         polys, normals, uvs = np.array([[0, 1, 2]], np.int64), None, None
         fix = None
+        tangents = None
     else:
         fix = obj
         verts, normals, uvs = obj.vertices, obj.normals, obj.uvs
+        tangents = getattr(obj, "tangents", None)
         as_polygons = obj.repair_t_junctions or (keep_polygons and not obj.triangulate)
         polys = obj.polygons if as_polygons else obj.faces
     if world_from_object is not None:
         verts = verts @ world_from_object[:3, :3].T + world_from_object[:3, 3]
         if normals is not None:
             normals = normals @ np.linalg.inv(world_from_object[:3, :3])  # inverse transpose, row vectors
+        if tangents is not None:  # tangents are carried like edges; a mirror turns the handedness over
+            linear = world_from_object[:3, :3]
+            tangents = np.column_stack([tangents[:, :3] @ linear.T,
+                                        tangents[:, 3] * np.sign(np.linalg.det(linear))])
     if fix is not None and fix.repair_t_junctions:
         # the inserted vertices are existing ones, so per-vertex normals and uvs stay valid
         polys = meshops.repair_t_junctions(verts, [np.asarray(p) for p in polys])
@@ -57,21 +64,26 @@ def prepare_mesh(obj, world_from_object: Optional[np.ndarray], keep_polygons: bo
     if fix is not None and fix.subdivide:
         verts, polys, uvs = meshops.subdivide(verts, polys, scheme=fix.subdivision, levels=fix.subdivide, uvs=uvs)
         normals, groups = None, None  # new vertices need new normals; each small triangle is its own polygon
+        tangents = None  # and new tangents: the normal maps take their frame from the uvs
     if normals is None and fix is not None and fix.smooth:
         if isinstance(polys, list):  # polygons drawn as polygons
             verts, polys, normals, source = _polygon_normals(verts, polys, fix.normal_weighting, fix.crease_angle)
             if uvs is not None:
                 uvs = uvs[source]
+            if tangents is not None:
+                tangents = tangents[source]
         else:
             verts, polys, normals, source = meshops.vertex_normals(
                 verts, polys, weighting=fix.normal_weighting, crease_angle=fix.crease_angle)
             if uvs is not None:
                 uvs = uvs[source]  # faces keep their order, so groups stay valid
+            if tangents is not None:
+                tangents = tangents[source]
     if normals is not None:
         normals = _unit(np.asarray(normals, dtype=np.float64))
     if groups is None and not isinstance(polys, list):
         groups = np.arange(len(polys))
-    return PreparedMesh(verts, normals, uvs, polys, groups)
+    return PreparedMesh(verts, normals, uvs, polys, groups, tangents)
 
 
 def _polygon_normals(verts, polys, weighting, crease_angle):

@@ -1,11 +1,16 @@
 """Materials' textures and bump maps → `tex_info` rows and one `tex_pixels` buffer (layout: `kernels.texture`).
 
-    tex_info, tex_pixels = build_textures(materials)   # also sets each row's MAT_TEXTURE / MAT_BUMP
+    tex_info, tex_pixels = build_textures(materials)   # also sets each row's MAT_TEXTURE(_COUNT) / MAT_BUMP
 
 Images are read once each with Pillow (two materials naming the same file share its texels). A colour texture
 is decoded from sRGB to linear RGB (`film.srgb_decode`); a bump map is data, not colour: its height is the
-Rec. 709 luminance of the file's raw values scaled to [0, 1], not decoded. Rows are stored bottom row first;
-for the scan-line renderer a colour image is followed by its mip-map levels (`mip_levels`).
+Rec. 709 luminance of the file's raw values scaled to [0, 1], not decoded; a normal map keeps its raw RGB; an
+opacity texture keeps the image's alpha channel (its raw luminance when it has none) in all three channels.
+Rows are stored bottom row first; for the scan-line renderer a colour image is followed by its mip-map levels
+(`mip_levels`).
+
+A material's textures are consecutive tex_info rows, in list order; a texture applied to `opacity` and to
+colours as well becomes two rows (the colour one first), so that a row reads either colour or coverage.
 """
 
 from __future__ import annotations
@@ -19,9 +24,10 @@ from ..kernels import layout as L
 from ..kernels import texture as T
 
 _KINDS = {"image": T.TEXTURE_IMAGE, "checker": T.TEXTURE_CHECKER, "stripes": T.TEXTURE_STRIPES,
-          "noise": T.TEXTURE_NOISE}
+          "noise": T.TEXTURE_NOISE, "normal": T.TEXTURE_IMAGE}
 _WRAPS = {"repeat": T.WRAP_REPEAT, "clamp": T.WRAP_CLAMP}
-_APPLY = {"ka": T.APPLY_KA, "kd": T.APPLY_KD, "ks": T.APPLY_KS, "kr": T.APPLY_KR}
+_APPLY = {"ka": T.APPLY_KA, "kd": T.APPLY_KD, "ks": T.APPLY_KS, "kr": T.APPLY_KR, "emission": T.APPLY_EMISSION}
+_MODES = {"replace": T.MODE_REPLACE, "multiply": T.MODE_MULTIPLY}
 #: Rec. 709 / sRGB luminance weights
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
 
@@ -31,15 +37,25 @@ def build_textures(materials, mipmaps: bool = False) -> tuple[np.ndarray, np.nda
     With `mipmaps`, each colour image is followed by its mip-map levels (the scan-line renderer filters with
     them; the ray methods look up level 0 only and skip building them).
 
-    Writes the tex_info row of each material's texture and bump map (or -1) into its MAT_TEXTURE and MAT_BUMP
-    columns, in place in `materials.rows`, so call it before `materials.array()`.
+    Writes the first tex_info row of each material's textures (or -1) and their count into its MAT_TEXTURE and
+    MAT_TEXTURE_COUNT columns and its bump map's row (or -1) into MAT_BUMP, in place in `materials.rows`, so
+    call it before `materials.array()`.
     """
     table = _Table(mipmaps)
+    if any(m is not None and any("opacity" in t.apply_to for t in m.textures) for m in materials.materials):
+        import warnings
+
+        from ..errors import LumosWarning
+
+        warnings.warn(LumosWarning("textures applied to opacity (cut-outs) are not rendered yet: those surfaces "
+                                   "stay opaque"), stacklevel=3)
     for row, material in zip(materials.rows, materials.materials):
+        row[L.MAT_TEXTURE], row[L.MAT_TEXTURE_COUNT] = -1.0, 0.0
         if material is None:  # an area light's emitter
             continue
-        row[L.MAT_TEXTURE] = -1.0 if material.texture is None else table.add(material.texture, bump=False)
-        row[L.MAT_BUMP] = -1.0 if material.bump is None else table.add(material.bump, bump=True)
+        if material.textures:
+            row[L.MAT_TEXTURE], row[L.MAT_TEXTURE_COUNT] = table.add_list(material.textures)
+        row[L.MAT_BUMP] = -1.0 if material.bump is None else table.add_bump(material.bump)
     return table.arrays()
 
 
@@ -47,39 +63,63 @@ class _Table:
     def __init__(self, mipmaps: bool):
         self.mipmaps = mipmaps
         self.infos: list[np.ndarray] = []
-        self.rows: dict[int, int] = {}  # id(texture model) -> tex_info row
-        self.images: dict[tuple[Path, bool], tuple[int, int, int, int]] = {}  # (path, bump) -> offset, w, h, levels
+        self.lists: dict[tuple, tuple[int, int]] = {}  # ids of a material's texture models -> first row, count
+        self.bumps: dict[int, int] = {}  # id(bump model) -> tex_info row
+        self.images: dict[tuple[Path, str], tuple[int, int, int, int]] = {}  # (path, kind) -> offset, w, h, levels
         self.pixels: list[np.ndarray] = []
         self.n_pixels = 0
 
-    def add(self, tex, bump: bool) -> int:
-        key = id(tex)
-        if key in self.rows:
-            return self.rows[key]
+    def add_list(self, textures) -> tuple[int, int]:
+        key = tuple(id(t) for t in textures)
+        if key not in self.lists:
+            first = len(self.infos)
+            for tex in textures:
+                colour = sum(_APPLY[name] for name in set(tex.apply_to) if name != "opacity")
+                if colour:
+                    self.infos.append(self._row(tex, colour, "color"))
+                if "opacity" in tex.apply_to:
+                    self.infos.append(self._row(tex, T.APPLY_OPACITY, "alpha"))
+            self.lists[key] = (first, len(self.infos) - first)
+        return self.lists[key]
+
+    def add_bump(self, bump) -> int:
+        if id(bump) not in self.bumps:
+            self.bumps[id(bump)] = len(self.infos)
+            self.infos.append(self._row(bump, 0, "normal" if bump.type == "normal" else "height"))
+        return self.bumps[id(bump)]
+
+    def _row(self, tex, apply: int, kind: str) -> np.ndarray:
+        """One tex_info row; `kind` is what its texels hold: color, alpha, height or normal."""
         info = np.zeros(T.TEX_SIZE)
         info[T.TEX_KIND] = _KINDS[tex.type]
         info[T.TEX_SCALE_U], info[T.TEX_SCALE_V] = tex.uv_scale
+        info[T.TEX_SHIFT_U], info[T.TEX_SHIFT_V] = tex.offset
         info[T.TEX_WRAP] = _WRAPS[tex.wrap]
-        if bump:  # black to white: channel 0 of the lookup is the height
+        info[T.TEX_APPLY] = apply
+        if kind in ("height", "normal"):  # black to white: channel 0 of a height lookup is the height
             info[T.TEX_COLOR1 : T.TEX_COLOR1 + 3] = 1.0
             info[T.TEX_STRENGTH] = tex.strength
+            info[T.TEX_BUMP_TYPE] = T.BUMP_NORMAL if kind == "normal" else T.BUMP_HEIGHT
+        elif kind == "alpha":  # a pattern's coverage: the luminance of its colours
+            info[T.TEX_COLOR0 : T.TEX_COLOR0 + 3] = float(np.dot(tex.colors[0], _LUMA))
+            info[T.TEX_COLOR1 : T.TEX_COLOR1 + 3] = float(np.dot(tex.colors[1], _LUMA))
+            info[T.TEX_MODE] = _MODES[tex.mode]
         else:
             info[T.TEX_COLOR0 : T.TEX_COLOR0 + 3] = tex.colors[0]
             info[T.TEX_COLOR1 : T.TEX_COLOR1 + 3] = tex.colors[1]
-            info[T.TEX_APPLY] = sum(_APPLY[name] for name in set(tex.apply_to))
-        if tex.type == "image":
-            info[T.TEX_OFFSET], info[T.TEX_WIDTH], info[T.TEX_HEIGHT], info[T.TEX_LEVELS] = self._image(tex, bump)
-        self.rows[key] = len(self.infos)
-        self.infos.append(info)
-        return self.rows[key]
+            info[T.TEX_MODE] = _MODES[tex.mode]
+        if tex.file is not None:
+            info[T.TEX_OFFSET], info[T.TEX_WIDTH], info[T.TEX_HEIGHT], info[T.TEX_LEVELS] = self._image(tex, kind)
+        return info
 
-    def _image(self, tex, bump: bool) -> tuple[int, int, int, int]:
+    def _image(self, tex, kind: str) -> tuple[int, int, int, int]:
         path = tex._path if tex._path is not None else Path(tex.file).expanduser().resolve()
-        key = (path, bump)
+        key = (path, kind)
         if key not in self.images:
-            texels = load_texels(path, bump)
+            texels = load_texels(path, kind=kind)
             h, w = texels.shape[:2]
-            levels = mip_levels(texels[::-1]) if self.mipmaps and not bump else [texels[::-1]]  # bottom row first: v = 0 at the bottom
+            # bottom row first: v = 0 at the bottom
+            levels = mip_levels(texels[::-1]) if self.mipmaps and kind == "color" else [texels[::-1]]
             self.images[key] = (self.n_pixels, w, h, len(levels))
             for level in levels:
                 self.pixels.append(level.reshape(-1, 3))
@@ -100,6 +140,21 @@ def texture_mean(tex) -> np.ndarray:
         path = tex._path if tex._path is not None else Path(tex.file).expanduser().resolve()
         return load_texels(path).reshape(-1, 3).astype(np.float64).mean(axis=0)
     return 0.5 * (np.asarray(tex.colors[0], np.float64) + np.asarray(tex.colors[1], np.float64))
+
+
+def mean_coefficients(material) -> dict[str, np.ndarray]:
+    """The material's ka, kd, ks, kr and emission (float64 (3,) each) with each of its textures' mean colour
+    applied in list order, replacing or multiplying as its `mode` says (opacity is left out): what a method
+    that cannot look textures up per point (radiosity) uses."""
+    out = {name: np.asarray(getattr(material, name), np.float64) for name in ("ka", "kd", "ks", "kr", "emission")}
+    for tex in material.textures:
+        targets = [name for name in tex.apply_to if name != "opacity"]
+        if not targets:
+            continue
+        mean = texture_mean(tex)
+        for name in targets:
+            out[name] = mean * out[name] if tex.mode == "multiply" else mean
+    return out
 
 
 def mip_levels(texels: np.ndarray) -> list[np.ndarray]:
@@ -133,13 +188,17 @@ def _shrink(a: np.ndarray, m: int, axis: int) -> np.ndarray:
     return np.moveaxis(out, 0, axis)
 
 
-def load_texels(path, bump: bool = False) -> np.ndarray:
-    """float32 (H, W, 3) texels of an image file, top row first: linear RGB decoded from sRGB, or for a bump map
-    (`bump=True`) the luminance of the raw values in [0, 1], repeated in all three channels. Alpha is ignored."""
+def load_texels(path, bump: bool = False, kind: str = "color") -> np.ndarray:
+    """float32 (H, W, 3) texels of an image file, top row first, by `kind`: `color`, linear RGB decoded from
+    sRGB; `height` (or `bump=True`), the luminance of the raw values in [0, 1], repeated in all three channels;
+    `normal`, the raw RGB in [0, 1]; `alpha`, the raw alpha channel, or the raw luminance of an image without
+    one, repeated in all three channels. Only `alpha` reads the alpha channel."""
     from PIL import Image as PILImage
 
     from ..film import srgb_decode
 
+    kind = "height" if bump else kind
+    alpha = None
     try:
         with PILImage.open(path) as img:
             img.load()
@@ -150,10 +209,14 @@ def load_texels(path, bump: bool = False) -> np.ndarray:
                 raw = np.repeat(np.asarray(img, dtype=np.float64)[..., None], 3, axis=2)
             else:
                 raw = np.asarray(img.convert("RGB"), dtype=np.float64) / 255.0
+                if kind == "alpha" and ("A" in img.getbands() or "transparency" in img.info):
+                    alpha = np.asarray(img.convert("RGBA"), dtype=np.float64)[..., 3] / 255.0
     except (OSError, ValueError, SyntaxError) as exc:  # PIL raises all three on bad files
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise LumosError(f"cannot read image {str(path)!r}: {reason}") from None
-    if bump:
-        height = raw @ _LUMA
-        return np.repeat(height[..., None], 3, axis=2).astype(np.float32)
+    if kind in ("height", "alpha"):
+        value = raw @ _LUMA if alpha is None else alpha
+        return np.repeat(value[..., None], 3, axis=2).astype(np.float32)
+    if kind == "normal":
+        return raw.astype(np.float32)
     return srgb_decode(raw).astype(np.float32)

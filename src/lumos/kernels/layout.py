@@ -32,6 +32,7 @@ FLAG_CAPPED = 1  # shapes: cylinder/cone caps
 FLAG_READS_UV = 2  # shapes: the material reads (u, v) (a texture or bump map); the others skip computing them
 FLAG_NORMALS = 1  # triangles: per-vertex shading normals present
 FLAG_UVS = 2  # triangles: per-vertex uvs present
+FLAG_TANGENTS = 4  # triangles: per-vertex tangents present (in tri_tangents)
 
 # Material columns (materials: float64 (n, MAT_SIZE))
 MAT_KA = 0
@@ -43,8 +44,9 @@ MAT_KT = 13
 MAT_IOR = 16
 MAT_EMISSION = 17
 MAT_FRESNEL = 20  # 1.0: Schlick-weighted reflection and transmission (whitted)
-MAT_TEXTURE = 21  # row in tex_info of the material's texture, or -1
+MAT_TEXTURE = 21  # first row in tex_info of the material's textures, or -1 (they follow one another)
 MAT_BUMP = 22  # row in tex_info of its bump map, or -1
+MAT_TEXTURE_COUNT = 23  # how many tex_info rows from MAT_TEXTURE are its textures (0 with none)
 MAT_SIZE = 24
 
 # Light kinds and columns. Kinds up to LIGHT_DIRECTIONAL are delta lights (one direction per shading point, no
@@ -127,6 +129,8 @@ SceneArrays = namedtuple(
         "csg_nodes",  # int32 (nc, 4): see kernels.csg
         "tex_info",  # float64 (nx, TEX_SIZE): textures and bump maps, see kernels.texture
         "tex_pixels",  # float32 (npx, 3): every image texture's texels, row after row, one after another
+        "tri_tangents",  # float32 (nt, 12): per-vertex tangents (xyz, w) of triangles with FLAG_TANGENTS; (0, 12)
+        # when no triangle has them
     ],
 )
 
@@ -182,4 +186,4 @@ PatchArrays = namedtuple(
     ],
 )
 #: What texture lookups read (kernels.texture).
-Textures = namedtuple("Textures", ["tex_info", "tex_pixels"])
+Textures = namedtuple("Textures", ["tex_info", "tex_pixels", "tri_tangents"])

@@ -1,13 +1,17 @@
 """Textures, UV derivatives and bump mapping at a hit: what the ray methods call between `surface_at` and the
 illumination model.
 
-    ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)             # texture colour replaces its apply_to set
+    ka, kd, ks, kr, ke = material_coeffs(tex, mat, u, v, p)         # the textures applied in list order
     dpdu, dpdv = surface_tangents(surf, ref, part, p, n, time)     # world-space ∂p/∂u, ∂p/∂v
+    dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time)  # the same, or a mesh's tangents
     n_bumped = bump_normal(tex, mat, u, v, p, n, dpdu, dpdv)        # unit; n itself when there is no bump map
+    hole = is_hole(tex, mat, u, v, p)                               # an opacity texture's α < ALPHA_CUTOFF
 
 * `tex` is a `layout.Textures` view (`views.textures_of`), `surf` a `layout.Surfaces` view.
-* `mat` is the material's ROW, `materials[material_id]` (float64 (MAT_SIZE,)); its `MAT_TEXTURE` / `MAT_BUMP`
-  columns hold a row of `tex_info` or -1.
+* `mat` is the material's ROW, `materials[material_id]` (float64 (MAT_SIZE,)); its textures are the
+  `MAT_TEXTURE_COUNT` rows of `tex_info` from `MAT_TEXTURE` (-1: none), its bump map row `MAT_BUMP` (or -1).
+* `tex.tri_tangents`: float32 (nt, 12), per triangle the three vertices' tangents (xyz, w) where tri_info's
+  FLAG_TANGENTS is set ((0, 12) when no triangle has them).
 * `u, v` are the hit's surface coordinates from `surface_at`; `p` the world-space hit point (unused by the
   current 2-D texture kinds; kept for solid textures).
 * `ref, part` are the hit record of `traverse.closest_hit` (triangle index or ~shape, the face hit); `time` the
@@ -20,13 +24,18 @@ Everything is a tuple of float64; nothing allocates.
 ## tex_info columns (float64 (n, TEX_SIZE)), one row per texture or bump map
 
     TEX_KIND       TEXTURE_IMAGE | TEXTURE_CHECKER | TEXTURE_STRIPES | TEXTURE_NOISE
-    TEX_SCALE_U/V  repeats across the uv square: the pattern is looked up at (s, t) = (scale_u·u, scale_v·v)
+    TEX_SCALE_U/V  repeats across the uv square: the pattern is looked up at (s, t) = (scale_u·u + shift_u, scale_v·v + shift_v)
     TEX_WRAP       WRAP_REPEAT: (s, t) unbounded, the pattern tiles; WRAP_CLAMP: (u, v) clamped to the uv square
                    first, so the pattern covers it once (scale times) and its edge extends beyond
     TEX_COLOR0..+2, TEX_COLOR1..+2   the two colours of checker, stripes and noise (linear RGB); a bump map's
                    are black and white, so that channel 0 of its `texture_rgb` is its height
     TEX_OFFSET, TEX_WIDTH, TEX_HEIGHT   image: its first texel in tex_pixels, and its size in texels
-    TEX_APPLY      bit mask of the coefficients the colour replaces: APPLY_KA | APPLY_KD | APPLY_KS | APPLY_KR
+    TEX_APPLY      bit mask of the coefficients the colour applies to: APPLY_KA | APPLY_KD | APPLY_KS | APPLY_KR |
+                   APPLY_EMISSION, or APPLY_OPACITY alone (a coverage row: channel 0 is α); 0 for bump maps
+    TEX_MODE       MODE_REPLACE (the coefficient becomes the colour) or MODE_MULTIPLY (is multiplied by it)
+    TEX_SHIFT_U/V  the offset added to the scaled coordinates: (s, t) = (scale_u·u + shift_u, scale_v·v + shift_v)
+    TEX_BUMP_TYPE  bump maps: BUMP_HEIGHT (Blinn bumps of a height field) or BUMP_NORMAL (a tangent-space normal
+                   map; its texels are raw RGB, `normal_mapped`)
     TEX_STRENGTH   bump maps: the height scale (world units of displacement per unit of height)
     TEX_LEVELS     colour images: how many mip-map levels follow one another from OFFSET (1: the image alone)
 
@@ -82,15 +91,18 @@ import numpy as np
 from .csg import csg_leaf
 from .jit import njit, njit_inline
 from .layout import (
+    FLAG_TANGENTS,
     FLAG_UVS,
     INFO_FLAGS,
     INFO_KIND,
     MAT_BUMP,
+    MAT_EMISSION,
     MAT_KA,
     MAT_KD,
     MAT_KR,
     MAT_KS,
     MAT_TEXTURE,
+    MAT_TEXTURE_COUNT,
     SHAPE_BOX,
     SHAPE_CONE,
     SHAPE_CSG,
@@ -115,7 +127,11 @@ TEX_HEIGHT = 12
 TEX_APPLY = 13
 TEX_STRENGTH = 14
 TEX_LEVELS = 15
-TEX_SIZE = 16
+TEX_SHIFT_U = 16
+TEX_SHIFT_V = 17
+TEX_MODE = 18
+TEX_BUMP_TYPE = 19
+TEX_SIZE = 20
 
 # TEX_KIND values
 TEXTURE_IMAGE = 0
@@ -132,6 +148,19 @@ APPLY_KA = 1
 APPLY_KD = 2
 APPLY_KS = 4
 APPLY_KR = 8
+APPLY_EMISSION = 16
+APPLY_OPACITY = 32
+
+# TEX_MODE values (colour textures)
+MODE_REPLACE = 0
+MODE_MULTIPLY = 1
+
+# TEX_BUMP_TYPE values (bump maps)
+BUMP_HEIGHT = 0
+BUMP_NORMAL = 1
+
+#: Coverage below this is a cut-out hole (glTF alphaMode MASK's default alphaCutoff, MTL map_d read the same way).
+ALPHA_CUTOFF = 0.5
 
 #: Under clamp, u and v stay below this so that the far edge of the uv square keeps the last cell's colour.
 _CLAMP_MAX = 1.0 - 1e-9
@@ -154,8 +183,8 @@ def texture_rgb(tex, row, u, v, p):
         v = min(max(v, 0.0), _CLAMP_MAX)
     su = info[TEX_SCALE_U]
     sv = info[TEX_SCALE_V]
-    s = su * u
-    t = sv * v
+    s = su * u + info[TEX_SHIFT_U]
+    t = sv * v + info[TEX_SHIFT_V]
     kind = info[TEX_KIND]
     if kind == TEXTURE_IMAGE:
         return _bilinear(tex.tex_pixels, info, s, t, su, sv)
@@ -191,12 +220,12 @@ def texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy):
         ay = (dudy * w) ** 2 + (dvdy * h) ** 2
         longest = max(ax, ay)  # squared, in level-0 texels
         if not (longest > 1.0) or info[TEX_LEVELS] <= 1.0:  # magnified (or NaN): bilinear
-            return _bilinear(tex.tex_pixels, info, su * u, sv * v, su, sv)
+            return _bilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv)
         lod = 0.5 * math.log2(longest) if longest < 1e300 else 1e9
-        return _trilinear(tex.tex_pixels, info, su * u, sv * v, su, sv, lod)
-    fs = _odd_fraction(su * u, su * max(abs(dudx), abs(dudy)))
+        return _trilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv, lod)
+    fs = _odd_fraction(su * u + info[TEX_SHIFT_U], su * max(abs(dudx), abs(dudy)))
     if kind == TEXTURE_CHECKER:
-        ft = _odd_fraction(sv * v, sv * max(abs(dvdx), abs(dvdy)))
+        ft = _odd_fraction(sv * v + info[TEX_SHIFT_V], sv * max(abs(dvdx), abs(dvdy)))
         x = fs * (1.0 - ft) + ft * (1.0 - fs)
     else:  # stripes
         x = fs
@@ -209,17 +238,18 @@ def texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy):
 def _bilinear(pixels, info, s, t, su, sv):
     """Bilinear filtering between texel centres at scaled coordinates (s, t) (one image per unit square)."""
     return _bilinear_level(pixels, np.int64(info[TEX_OFFSET]), np.int64(info[TEX_WIDTH]), np.int64(info[TEX_HEIGHT]),
-                           info[TEX_WRAP] == WRAP_CLAMP, s, t, su, sv)
+                           info[TEX_WRAP] == WRAP_CLAMP, s, t, su, sv, info[TEX_SHIFT_U], info[TEX_SHIFT_V])
 
 
 @njit_inline
-def _bilinear_level(pixels, offset, w, h, clamp, s, t, su, sv):
-    """`_bilinear` on the w × h texels from row `offset` of `pixels` (one mip-map level)."""
+def _bilinear_level(pixels, offset, w, h, clamp, s, t, su, sv, ou, ov):
+    """`_bilinear` on the w × h texels from row `offset` of `pixels` (one mip-map level); (ou, ov) is the
+    texture's offset, where the clamped strip [ou, ou + su] × [ov, ov + sv] of scaled coordinates starts."""
     x = s * w - 0.5
     y = t * h - 0.5
     if clamp:  # stop at the centres of the first and last texels of the strip
-        x = min(max(x, 0.0), max(su * w - 1.0, 0.0))
-        y = min(max(y, 0.0), max(sv * h - 1.0, 0.0))
+        x = min(max(x, ou * w), max((su + ou) * w - 1.0, ou * w))
+        y = min(max(y, ov * h), max((sv + ov) * h - 1.0, ov * h))
     xf = math.floor(x)
     yf = math.floor(y)
     fx = x - xf
@@ -261,11 +291,14 @@ def _trilinear(pixels, info, s, t, su, sv, lod):
         offset += w * h
         w = max(np.int64(1), w // 2)
         h = max(np.int64(1), h // 2)
-    c0 = _bilinear_level(pixels, offset, w, h, clamp, s, t, su, sv)
+    ou = info[TEX_SHIFT_U]
+    ov = info[TEX_SHIFT_V]
+    c0 = _bilinear_level(pixels, offset, w, h, clamp, s, t, su, sv, ou, ov)
     if frac == 0.0:
         return c0
     offset += w * h
-    c1 = _bilinear_level(pixels, offset, max(np.int64(1), w // 2), max(np.int64(1), h // 2), clamp, s, t, su, sv)
+    c1 = _bilinear_level(pixels, offset, max(np.int64(1), w // 2), max(np.int64(1), h // 2), clamp, s, t, su, sv,
+                         ou, ov)
     a = 1.0 - frac
     return a * c0[0] + frac * c1[0], a * c0[1] + frac * c1[1], a * c0[2] + frac * c1[2]
 
@@ -351,43 +384,94 @@ def noise01(s, t, period_s, period_t):
 
 @njit_inline
 def material_coeffs(tex, mat, u, v, p):
-    """(ka, kd, ks, kr), each an RGB tuple: the material row's coefficients, with those named by its texture's
-    apply_to mask replaced by the texture colour at (u, v). No texture: the row's own values."""
+    """(ka, kd, ks, kr, emission), each an RGB tuple: the material row's coefficients with its textures applied
+    at (u, v) in list order, each replacing or multiplying the coefficients of its apply_to mask. No textures:
+    the row's own values."""
     return material_coeffs_filtered(tex, mat, u, v, p, 0.0, 0.0, 0.0, 0.0)
 
 
 @njit_inline
+def _apply(mode, old, color):
+    if mode == MODE_MULTIPLY:
+        return old[0] * color[0], old[1] * color[1], old[2] * color[2]
+    return color
+
+
+@njit_inline
 def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
-    """`material_coeffs` with the texture filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy); a zero
+    """`material_coeffs` with the textures filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy); a zero
     footprint is the point lookup."""
     ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
     kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
     ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
     kr = (mat[MAT_KR], mat[MAT_KR + 1], mat[MAT_KR + 2])
-    row = np.int64(mat[MAT_TEXTURE])
-    if row < 0:
-        return ka, kd, ks, kr
-    color = texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy)
-    mask = np.int64(tex.tex_info[row, TEX_APPLY])
-    if mask & APPLY_KA:
-        ka = color
-    if mask & APPLY_KD:
-        kd = color
-    if mask & APPLY_KS:
-        ks = color
-    if mask & APPLY_KR:
-        kr = color
-    return ka, kd, ks, kr
+    ke = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
+    first = np.int64(mat[MAT_TEXTURE])
+    if first < 0:
+        return ka, kd, ks, kr, ke
+    for row in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
+        mask = np.int64(tex.tex_info[row, TEX_APPLY])
+        if (mask & ~APPLY_OPACITY) == 0:
+            continue  # a coverage row
+        color = texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy)
+        mode = tex.tex_info[row, TEX_MODE]
+        if mask & APPLY_KA:
+            ka = _apply(mode, ka, color)
+        if mask & APPLY_KD:
+            kd = _apply(mode, kd, color)
+        if mask & APPLY_KS:
+            ks = _apply(mode, ks, color)
+        if mask & APPLY_KR:
+            kr = _apply(mode, kr, color)
+        if mask & APPLY_EMISSION:
+            ke = _apply(mode, ke, color)
+    return ka, kd, ks, kr, ke
+
+
+@njit_inline
+def has_cutout(tex, mat):
+    """Whether the material has an opacity texture (its surface may have holes)."""
+    first = np.int64(mat[MAT_TEXTURE])
+    if first < 0:
+        return False
+    for row in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
+        if np.int64(tex.tex_info[row, TEX_APPLY]) & APPLY_OPACITY:
+            return True
+    return False
+
+
+@njit
+def material_alpha(tex, mat, u, v, p):
+    """The coverage α at (u, v): 1, then each opacity texture in list order replacing or multiplying it by its
+    channel 0 (an image's alpha or luminance, a pattern's luminance). α < ALPHA_CUTOFF is a hole."""
+    alpha = 1.0
+    first = np.int64(mat[MAT_TEXTURE])
+    if first < 0:
+        return alpha
+    for row in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
+        if np.int64(tex.tex_info[row, TEX_APPLY]) & APPLY_OPACITY:
+            a = texture_rgb(tex, row, u, v, p)[0]
+            alpha = alpha * a if tex.tex_info[row, TEX_MODE] == MODE_MULTIPLY else a
+    return alpha
+
+
+@njit_inline
+def is_hole(tex, mat, u, v, p):
+    """True where the material's opacity textures cut the surface away (α < ALPHA_CUTOFF)."""
+    return has_cutout(tex, mat) and material_alpha(tex, mat, u, v, p) < ALPHA_CUTOFF
 
 
 @njit
 def bump_normal(tex, mat, u, v, p, n, dpdu, dpdv):
-    """The unit shading normal tilted by the material's bump map at (u, v) (Blinn 1978, see the module doc);
-    n unchanged when the material has none, its strength is 0 or the tangents are degenerate."""
+    """The unit shading normal tilted by the material's bump map at (u, v) (Blinn 1978, see the module doc), or
+    given by its normal map (`normal_mapped`); n unchanged when the material has none, its strength is 0 (height
+    maps) or the tangents are degenerate."""
     row = np.int64(mat[MAT_BUMP])
     if row < 0:
         return n
     info = tex.tex_info[row]
+    if info[TEX_BUMP_TYPE] == BUMP_NORMAL:
+        return normal_mapped(tex, row, u, v, p, n, dpdu, dpdv)
     strength = info[TEX_STRENGTH]
     if strength == 0.0:
         return n
@@ -414,6 +498,50 @@ def bump_normal(tex, mat, u, v, p, n, dpdu, dpdv):
     if bumped[0] == 0.0 and bumped[1] == 0.0 and bumped[2] == 0.0:
         return n
     return bumped
+
+
+@njit
+def normal_mapped(tex, row, u, v, p, n, dpdu, dpdv):
+    """The unit normal of tangent-space normal map `row` at (u, v): texel c (raw RGB in [0, 1]) → m = 2c − 1,
+    m_x and m_y times the strength, N' = normalize(m_x·T + m_y·B + m_z·n) with T = dpdu made orthogonal to n
+    (Gram–Schmidt) and B = ±(n × T), on dpdv's side (glTF's frame: B = w·(n × T) with the tangent's
+    handedness w). n unchanged where T vanishes or N' is zero."""
+    c = texture_rgb(tex, row, u, v, p)
+    k = tex.tex_info[row, TEX_STRENGTH]
+    mx = k * (2.0 * c[0] - 1.0)
+    my = k * (2.0 * c[1] - 1.0)
+    mz = 2.0 * c[2] - 1.0
+    d = dot(n, dpdu)
+    t = (dpdu[0] - d * n[0], dpdu[1] - d * n[1], dpdu[2] - d * n[2])
+    lt = length(t)
+    if not lt > 0.0:
+        return n
+    t = (t[0] / lt, t[1] / lt, t[2] / lt)
+    b = cross(n, t)
+    if dot(b, dpdv) < 0.0:
+        b = (-b[0], -b[1], -b[2])
+    out = (mx * t[0] + my * b[0] + mz * n[0], mx * t[1] + my * b[1] + mz * n[1], mx * t[2] + my * b[2] + mz * n[2])
+    if length(out) == 0.0:
+        return n
+    return normalize(out)
+
+
+@njit
+def bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time):
+    """(∂p/∂u, ∂p/∂v) for the material's bump map at a hit: `surface_tangents`, except that a normal map on a
+    triangle with per-vertex tangents (FLAG_TANGENTS) takes T, the tangents interpolated by the barycentrics
+    (b1, b2), and B = w·(n × T) with the handedness w of the first vertex."""
+    row = np.int64(mat[MAT_BUMP])
+    if (ref >= 0 and row >= 0 and tex.tex_info[row, TEX_BUMP_TYPE] == BUMP_NORMAL
+            and (surf.tri_info[ref, INFO_FLAGS] & FLAG_TANGENTS) != 0):
+        g = tex.tri_tangents
+        b0 = 1.0 - b1 - b2
+        t = (b0 * g[ref, 0] + b1 * g[ref, 4] + b2 * g[ref, 8], b0 * g[ref, 1] + b1 * g[ref, 5] + b2 * g[ref, 9],
+             b0 * g[ref, 2] + b1 * g[ref, 6] + b2 * g[ref, 10])
+        w = np.float64(g[ref, 3])
+        c = cross(n, t)
+        return t, (w * c[0], w * c[1], w * c[2])
+    return surface_tangents(surf, ref, part, p, n, time)
 
 
 # ------------------------------------------------------------------------------------------------ tangents

@@ -22,7 +22,7 @@ def lighting_of(sa):
 
 @njit
 def textures_of(sa):
-    return Textures(sa.tex_info, sa.tex_pixels)
+    return Textures(sa.tex_info, sa.tex_pixels, sa.tri_tangents)
 
 
 @njit_alloc
@@ -35,4 +35,4 @@ def owned_views(sa):
                      sa.unbounded, sa.csg_nodes, sa.wide_nodes, sa.wide_link),
             Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info),
             Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars),
-            Textures(sa.tex_info, sa.tex_pixels))
+            Textures(sa.tex_info, sa.tex_pixels, sa.tri_tangents))

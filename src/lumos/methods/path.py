@@ -47,12 +47,12 @@ from ..kernels.camera import camera_ray_at
 from ..kernels.emitters import emitter_pdf, sample_emitter
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
-from ..kernels.layout import CAM_APERTURE, LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_IOR, MAT_KT, MAT_SHININESS
+from ..kernels.layout import CAM_APERTURE, LIGHT_SPHERE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS
 from ..kernels.rng import rand2_key, rand_key, sample_key
 from ..kernels.sobol import sobol_2d
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
-from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
+from ..kernels.texture import bump_frame, bump_normal, material_coeffs
 from ..kernels.traverse import any_hit, closest_hit
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .common import Film, check_memory, row_bands, set_threads
@@ -195,8 +195,10 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
         mat = lit.materials[mat_id]
         wo = (-d[0], -d[1], -d[2])
         entering = n_geo[0] * d[0] + n_geo[1] * d[1] + n_geo[2] * d[2] < 0.0
-        # stage 2: emission found by the BSDF-sampled ray, weighted against light sampling
-        le0, le1, le2 = mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2]
+        ka, kd, ks, kr, le = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
+        # stage 2: emission found by the BSDF-sampled ray, weighted against light sampling (a textured emitter
+        # is not in the emitter table, so BSDF rays find it with full weight)
+        le0, le1, le2 = le
         if (le0 > 0.0 or le1 > 0.0 or le2 > 0.0) and (light < 0 or lit.light_kind[light] == LIGHT_SPHERE
                                                       or entering):
             w = 1.0
@@ -219,11 +221,10 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
             break
         # stage 3: the surface: bump map, normals on the viewer's side, the material's lobes
         if mat[MAT_BUMP] >= 0.0:
-            dpdu, dpdv = surface_tangents(surf, ref, hit[4], p, n_sh, time)
+            dpdu, dpdv = bump_frame(surf, tex, mat, ref, hit[4], hit[2], hit[3], p, n_sh, time)
             n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
         n_s = shading_side(n_sh, n_geo, wo)
         n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
-        ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)
         kd, ks, kr, kt = conserve_energy(kd, ks, kr, (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2]))
         p_d, p_s, p_r, p_t = lobe_probs(kd, ks, kr, kt)
         if depth == 0:

@@ -81,13 +81,14 @@ def _facing(n, V):
 
 @njit_inline
 def _surface_at(tex, mat, p, n, u, v, frame, footprint):
-    """(ka, kd, ks, shading normal): the material's coefficients at (u, v), filtered over `footprint` (du/dx,
-    dv/dx, du/dy, dv/dy), and n tilted by its bump map (the polygon's ∂p/∂u, ∂p/∂v in frame[0:6])."""
-    ka, kd, ks, _ = material_coeffs_filtered(tex, mat, u, v, p, footprint[0], footprint[1], footprint[2],
-                                             footprint[3])
+    """(ka, kd, ks, emission, shading normal): the material's coefficients at (u, v), filtered over `footprint`
+    (du/dx, dv/dx, du/dy, dv/dy), and n tilted by its bump map or given by its normal map (the polygon's
+    ∂p/∂u, ∂p/∂v in frame[0:6]; normal maps take their tangent frame from these, not from a mesh's tangents)."""
+    ka, kd, ks, _, ke = material_coeffs_filtered(tex, mat, u, v, p, footprint[0], footprint[1], footprint[2],
+                                                 footprint[3])
     if mat[MAT_BUMP] >= 0.0:
         n = bump_normal(tex, mat, u, v, p, n, (frame[0], frame[1], frame[2]), (frame[3], frame[4], frame[5]))
-    return ka, kd, ks, n
+    return ka, kd, ks, ke, n
 
 
 @njit_inline
@@ -160,7 +161,7 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
             n = (normals[i, 0], normals[i, 1], normals[i, 2])
             mat = lit.materials[materials_of[i]]
             frame = frames[i if i < frames.shape[0] else 0]  # one row of zeros when the scene has no textures
-            ka, kd, ks, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frame, _NO_FOOTPRINT)
+            ka, kd, ks, _, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frame, _NO_FOOTPRINT)
             if not gouraud:
                 n_f = _facing(n, V)
                 n_s = _facing(n_b, n_f)
@@ -218,6 +219,11 @@ def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, f
             V = _toward_eye(p, cam_vecs, ortho)
             fn = (prim_normal[prim, 0], prim_normal[prim, 1], prim_normal[prim, 2])
             kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
+            ke = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
+            textured = uv_at >= 0 and (mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0)
+            fp = _NO_FOOTPRINT
+            if textured and mipmap:
+                fp = _footprint(cam_vecs, ortho, pixel_size, p, fn, frames[prim])
             if shading == FLAT:
                 n_sh = _facing(fn, V)
                 a = (prim_terms[prim, 0], prim_terms[prim, 1], prim_terms[prim, 2])
@@ -231,15 +237,15 @@ def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, f
                     n_in = fn
                 ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
                 ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
-                if uv_at >= 0 and (mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0):
+                if textured:
                     u = np.float64(gbuf[y, x, uv_at])
                     v = np.float64(gbuf[y, x, uv_at + 1])
                     frame = frames[prim]
-                    fp = _footprint(cam_vecs, ortho, pixel_size, p, fn, frame) if mipmap else _NO_FOOTPRINT
                     if shading == PHONG:
-                        ka, kd, ks, n_in = _surface_at(tex, mat, p, n_in, u, v, frame, fp)
+                        ka, kd, ks, ke, n_in = _surface_at(tex, mat, p, n_in, u, v, frame, fp)
                     else:  # Gouraud: the texture per pixel; its bumps were applied at the vertices
-                        ka, kd, ks, _ = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
+                        ka, kd, ks, _, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2],
+                                                                     fp[3])
                 n_sh = shading_side(n_in, fn, V)
                 if shading == GOURAUD:
                     # the light on the side the viewer sees: the vertex normals' own side or the other one
@@ -259,9 +265,12 @@ def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, f
                                                        0 if x == explain[0] and y == explain[1] else -1)
                     rays += extra
             # emitted light: one-sided for rect and disk area lights (their winding faces the lit side)
+            if textured and shading == FLAT:  # the emission per pixel (the light at the polygon's centroid)
+                ke = material_coeffs_filtered(tex, mat, np.float64(gbuf[y, x, uv_at]),
+                                              np.float64(gbuf[y, x, uv_at + 1]), p, fp[0], fp[1], fp[2], fp[3])[4]
             e = (0.0, 0.0, 0.0)
             if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] >= 0.0:
-                e = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
+                e = ke
             for k in range(3):
                 accum[y, x, k] += weight * (a[k] + d[k] + sp[k] + e[k])
             if want_terms:

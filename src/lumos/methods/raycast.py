@@ -15,10 +15,10 @@ from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_parallel, prange
-from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_SHININESS
+from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
 from ..kernels.traverse import closest_hit
-from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
+from ..kernels.texture import bump_frame, bump_normal, material_coeffs
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
 from ..errors import LumosError
@@ -33,9 +33,9 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
     p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
     mat = lit.materials[mat_id]
     V = mul(d, -1.0)
-    ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)  # the material's, or its texture's where it has one
+    ka, kd, ks, kr, ke = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
     if mat[MAT_BUMP] >= 0.0:
-        dpdu, dpdv = surface_tangents(surf, ref, part, p, n_sh, 0.0)
+        dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n_sh, 0.0)
         n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
     # emitted light: two-sided for emissive materials, one-sided for rect and disk area lights
     emit = 1.0
@@ -47,7 +47,7 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
     a, dif, spec, rays = illuminate_terms(lit, geo, surf, p, n_sh, n_g, V, ka, kd, ks, mat[MAT_SHININESS], seed,
                                           pixel, sample, shadows, stack, stack_t, 0.0, per_light,
                                           log_base)
-    e = (emit * mat[MAT_EMISSION], emit * mat[MAT_EMISSION + 1], emit * mat[MAT_EMISSION + 2])
+    e = (emit * ke[0], emit * ke[1], emit * ke[2])
     rgb = (a[0] + dif[0] + spec[0] + e[0], a[1] + dif[1] + spec[1] + e[1], a[2] + dif[2] + spec[2] + e[2])
     return rgb, n_sh, kd, object_id, rays, (a, dif, spec, e)
 

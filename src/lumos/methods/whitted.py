@@ -34,7 +34,6 @@ from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from ..kernels.layout import (
     LIGHT_SPHERE,
-    MAT_EMISSION,
     MAT_FRESNEL,
     MAT_BUMP,
     MAT_IOR,
@@ -45,7 +44,7 @@ from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.traverse import closest_hit
-from ..kernels.texture import bump_normal, material_coeffs, surface_tangents
+from ..kernels.texture import bump_frame, bump_normal, material_coeffs
 from ..kernels.views import geometry_of, lighting_of, owned_views, surfaces_of, textures_of
 from ..errors import LumosError
 from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
@@ -205,15 +204,15 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         V = (-rd[0], -rd[1], -rd[2])
         entering = n_geo[0] * rd[0] + n_geo[1] * rd[1] + n_geo[2] * rd[2] < 0.0
         if mat[MAT_BUMP] >= 0.0:
-            dpdu, dpdv = surface_tangents(surf, ref, hit[4], p, n_sh, time)
+            dpdu, dpdv = bump_frame(surf, tex, mat, ref, hit[4], hit[2], hit[3], p, n_sh, time)
             n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
         n_s = shading_side(n_sh, n_geo, V)
         n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
         # emitted light: one-sided for rect and disk area lights
+        ka, kd, ks, kr, ke = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
         e = (0.0, 0.0, 0.0)
         if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or entering:
-            e = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
-        ka, kd, ks, kr = material_coeffs(tex, mat, u, v, p)  # the material's, or its texture's where it has one
+            e = ke
         kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
         if depth == 0:
             aov_t, aov_n, aov_kd, aov_obj = t, n_s, kd, obj

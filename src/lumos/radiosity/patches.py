@@ -262,7 +262,7 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     from ..compile.meshprep import prepare_mesh
     from ..compile.shapes import canonical, frame
     from ..compile.tessellate import tessellate_object
-    from ..compile.textures import texture_mean
+    from ..compile.textures import mean_coefficients
     from ..errors import LumosWarning
 
     lo, hi = usable_bounds(bounds)
@@ -281,12 +281,9 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
         key = id(mat)
         if key not in mat_index:
             mat_index[key] = len(mat_index)
-        kd, ks, kr = (np.asarray(c, np.float64) for c in (mat.kd, mat.ks, mat.kr))
-        if mat.texture is not None:  # a patch takes the texture's mean colour where the texture applies
-            mean = texture_mean(mat.texture)
-            kd = mean if "kd" in mat.texture.apply_to else kd
-            ks = mean if "ks" in mat.texture.apply_to else ks
-            kr = mean if "kr" in mat.texture.apply_to else kr
+        means = mean_coefficients(mat)  # a patch takes its textures' mean colours where they apply
+        kd, ks, kr, emission = means["kd"], means["ks"], means["kr"], means["emission"]
+        if mat.textures:
             if key not in textured:
                 textured.add(key)
                 name = next((repr(k) for k, m in scene.materials.items() if m is mat), "an inline material")
@@ -295,7 +292,7 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
         total = kd + ks + kr + np.asarray(mat.kt)
         if total.max() > 1.0:
             kd = kd / total.max()
-        return mat_index[key], kd, np.asarray(mat.emission, np.float64)
+        return mat_index[key], kd, emission
 
     def optics(material) -> np.ndarray:
         return np.array([*material.kr, *material.kt, material.ior, 1.0 if material.fresnel else 0.0])

@@ -255,13 +255,15 @@ def _resolve_texture_files(scene: Scene, folder: Path, name: str, lines: Optiona
             if obj.material is not None and not isinstance(obj.material, str):
                 materials.append((at + ("material",), obj.material))
     for at, material in materials:
-        for key in ("texture", "bump"):
-            tex = getattr(material, key)
-            if tex is None or tex.file is None:
+        maps = [(("texture", k) if isinstance(material.texture, list) else ("texture",), tex)
+                for k, tex in enumerate(material.textures)]
+        maps += [(("bump",), material.bump)] if material.bump is not None else []
+        for key, tex in maps:
+            if tex.file is None:
                 continue
             path = (folder / Path(tex.file).expanduser()).resolve()
             if not path.is_file():
-                raise SceneError(f"{_where(name, lines, at + (key, 'file'))}: no such image file {tex.file!r}")
+                raise SceneError(f"{_where(name, lines, at + key + ('file',))}: no such image file {tex.file!r}")
             tex._path = path
 
 

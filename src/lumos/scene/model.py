@@ -197,11 +197,26 @@ class Material(StrictModel):
     emission: Color = (0.0, 0.0, 0.0)
     #: whitted: weight reflection and transmission by Schlick's approximation of the Fresnel factor
     fresnel: bool = False
-    texture: Optional["Texture"] = None
+    #: one texture or a list of them, applied in list order (a later one sees what the earlier ones made)
+    texture: Optional[Union["Texture", list["Texture"]]] = None
     bump: Optional["Bump"] = None
 
+    @field_validator("texture", mode="after")
+    @classmethod
+    def _texture_list(cls, v):
+        if isinstance(v, list) and not v:
+            return None
+        return v
 
-TEXTURE_TARGETS = ("ka", "kd", "ks", "kr")
+    @property
+    def textures(self) -> list["Texture"]:
+        """The material's textures as a list, in the order they apply (empty when it has none)."""
+        if self.texture is None:
+            return []
+        return list(self.texture) if isinstance(self.texture, list) else [self.texture]
+
+
+TEXTURE_TARGETS = ("ka", "kd", "ks", "kr", "emission", "opacity")
 
 
 class _UVMap(StrictModel):
@@ -213,18 +228,22 @@ class _UVMap(StrictModel):
     #: repeats across the uv square: (u, v) multipliers (a scalar means both)
     scale: Union[tuple[Positive, Positive], Positive] = 1.0
     wrap: Literal["repeat", "clamp"] = "repeat"
+    #: added to the scaled coordinates: the pattern is looked up at (scale_u·u + offset_u, scale_v·v + offset_v)
+    offset: tuple[Finite, Finite] = (0.0, 0.0)
     _path: Optional[Path] = PrivateAttr(default=None)
     _noun: ClassVar[str] = "map"  # for error messages
+    _file_types: ClassVar[tuple[str, ...]] = ("image",)  # the types read from a file
 
-    @field_validator("scale", mode="before")
+    @field_validator("scale", "offset", mode="before")
     @classmethod
     def _scale_tuple(cls, v):
         return tuple(v) if isinstance(v, list) else v
 
     @model_validator(mode="after")
     def _check_file(self):
-        if (self.type == "image") != (self.file is not None):
-            raise ValueError(f"an image {self._noun} needs file (and only an image {self._noun} takes one)")
+        if (self.type in self._file_types) != (self.file is not None):
+            kind = " or ".join(self._file_types)
+            raise ValueError(f"an {kind} {self._noun} needs file (and only an {kind} {self._noun} takes one)")
         return self
 
     @property
@@ -233,13 +252,17 @@ class _UVMap(StrictModel):
 
 
 class Texture(_UVMap):
-    """A colour that varies over a surface, looked up at the hit's (u, v), replacing the coefficients named in
-    `apply_to`. `image`: a PNG/JPEG file (relative to the scene file), bilinearly filtered; `checker`,
-    `stripes` (along u) and `noise` (gradient noise, blending `colors`) are procedural."""
+    """A colour that varies over a surface, looked up at the hit's (u, v), replacing (`mode: replace`) or
+    multiplying (`mode: multiply`) the coefficients named in `apply_to`. `image`: a PNG/JPEG file (relative to
+    the scene file), bilinearly filtered; `checker`, `stripes` (along u) and `noise` (gradient noise, blending
+    `colors`) are procedural. `apply_to: [opacity]` reads the coverage α instead of a colour: an image's alpha
+    channel (its luminance when it has none), a pattern's luminance; α < 0.5 is a cut-out hole."""
 
     type: Literal["image", "checker", "stripes", "noise"]
     colors: tuple[Color, Color] = ((0.9, 0.9, 0.9), (0.1, 0.1, 0.1))
-    apply_to: list[Literal["ka", "kd", "ks", "kr"]] = Field(default_factory=lambda: ["ka", "kd"])
+    apply_to: list[Literal["ka", "kd", "ks", "kr", "emission", "opacity"]] = Field(
+        default_factory=lambda: ["ka", "kd"])
+    mode: Literal["replace", "multiply"] = "replace"
     _noun: ClassVar[str] = "texture"
 
     @field_validator("colors", mode="before")
@@ -250,17 +273,20 @@ class Texture(_UVMap):
     @model_validator(mode="after")
     def _check(self):
         if not self.apply_to:
-            raise ValueError("apply_to must name at least one of ka, kd, ks, kr")
+            raise ValueError("apply_to must name at least one of ka, kd, ks, kr, emission, opacity")
         return self
 
 
 class Bump(_UVMap):
     """Bump mapping: the shading normal tilted by the gradient of a height field over (u, v): an image's
-    luminance or gradient noise, times `strength`."""
+    luminance or gradient noise, times `strength`; or (`type: normal`) replaced by a tangent-space normal map,
+    an image whose raw RGB in [0, 1] is the normal's (x, y, z) in [-1, 1] along (tangent, bitangent, normal),
+    x and y scaled by `strength`."""
 
-    type: Literal["image", "noise"]
+    type: Literal["image", "noise", "normal"]
     strength: Finite = 1.0
     _noun: ClassVar[str] = "bump map"
+    _file_types: ClassVar[tuple[str, ...]] = ("image", "normal")
 
 
 Material.model_rebuild()
@@ -469,6 +495,9 @@ class Mesh(ObjectBase):
     faces: Optional[Any] = None
     normals: Optional[Any] = None
     uvs: Optional[Any] = None
+    #: per-vertex tangents (n, 4): xyz along +u, w = ±1 the handedness (bitangent = w·normal × tangent), as
+    #: glTF TANGENT; normal maps use them (without them, the tangent frame comes from the uvs)
+    tangents: Optional[Any] = None
     # vertex normals when the mesh has none, and the fix-ups for interpolated shading
     smooth: bool = True
     normal_weighting: Literal["angle", "area", "average"] = "angle"
@@ -490,6 +519,18 @@ class Mesh(ObjectBase):
     @classmethod
     def _uv_rows(cls, v):
         return None if v is None else _array(v, "uvs", 2, np.float64)
+
+    @field_validator("tangents", mode="after")
+    @classmethod
+    def _tangent_rows(cls, v):
+        if v is None:
+            return None
+        arr = _array(v, "tangents", 4, np.float64)
+        if np.any(arr[:, 3] == 0.0):
+            bad = int(np.argwhere(arr[:, 3] == 0.0)[0][0])
+            raise ValueError(f"tangents[{bad}]: w (the handedness) must be 1 or -1, not 0")
+        arr[:, 3] = np.sign(arr[:, 3])
+        return arr
 
     @field_validator("faces", mode="after")
     @classmethod
@@ -516,7 +557,7 @@ class Mesh(ObjectBase):
         if (self.file is None) == (self.vertices is None):
             raise ValueError("give either file or vertices + faces")
         if self.file is not None:
-            for key in ("faces", "normals", "uvs"):
+            for key in ("faces", "normals", "uvs", "tangents"):
                 if getattr(self, key) is not None:
                     raise ValueError(f"{key} cannot be given with file (it comes from the file)")
             return self
@@ -550,7 +591,7 @@ class Mesh(ObjectBase):
         if self.faces.size and (self.faces.min() < 0 or self.faces.max() >= n):
             bad = int(np.argwhere((self.faces < 0) | (self.faces >= n))[0][0])
             raise ValueError(f"faces[{bad}] refers to a vertex that does not exist (there are {n})")
-        for key in ("normals", "uvs"):
+        for key in ("normals", "uvs", "tangents"):
             arr = getattr(self, key)
             if arr is not None and len(arr) != n:
                 raise ValueError(f"{key} has {len(arr)} rows but there are {n} vertices")
