@@ -455,12 +455,15 @@ def test_untextured_imports_validate_as_scenes(name):
     assert len(scene.objects) == len(import_obj(DATA / name).objects)
 
 
-@pytest.mark.xfail(strict=False, reason="texture lists, mode and offset arrive with the 'maps' branch")
 def test_textured_imports_validate_as_scenes(tmp_path):
     lumos.load_scene(scene_of(import_obj(DATA / "trimesh" / "fuze.obj")))
     (tmp_path / "t.png").write_bytes((DATA / "trimesh" / "fuze uv.jpg").read_bytes())
-    model = one_material(tmp_path, "Kd 1 1 1\nmap_Kd -o 0.5 0 t.png\nmap_d t.png\nillum 2\n")
-    lumos.load_scene(scene_of(model))
+    model = one_material(tmp_path, "Kd 1 1 1\nKs 0.5 0.5 0.5\nmap_Kd -o 0.5 0 t.png\nmap_Ks -s 2 2 t.png\n"
+                                   "map_d -clamp on t.png\nmap_Ke t.png\nnorm -bm 0.5 t.png\nillum 3\n")
+    scene = lumos.load_scene(scene_of(model))
+    textures = scene.materials["m"].texture
+    assert [t.apply_to for t in textures] == [["kd"], ["ks", "kr"], ["emission"], ["opacity"]]
+    assert scene.materials["m"].bump.type == "normal"
 
 
 def test_whitted_renders_an_imported_mcguire_box():
