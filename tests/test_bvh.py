@@ -202,17 +202,26 @@ def check_wide_tree(arrays, prim_boxes):
     child, count = link[:, L.WIDE_CHILD:L.WIDE_CHILD + 4], link[:, L.WIDE_COUNT:L.WIDE_COUNT + 4]
     seen_nodes = np.zeros(len(wide), int)
     seen_slots = np.zeros(len(arrays.prim_ref), int)
+    slot_of = {int(r): k for k, r in enumerate(arrays.prim_ref)}
+    leaf_link = np.asarray(arrays.leaf_link)
     stack = [0]
     while stack:
         w = stack.pop()
         seen_nodes[w] += 1
         for k in range(4):
             lo, hi = boxes[w, :3, k], boxes[w, 3:, k]
-            if count[w, k] < 0:  # empty: +inf min, -inf max
+            if count[w, k] == L.LEAF_PACKED:  # a packed row of triangles (see check_packed_leaves)
+                row = child[w, k]
+                base, mask = leaf_link[row, L.LEAF_BASE], leaf_link[row, L.LEAF_MASK]
+                for r in range(base, base + int(mask).bit_length()):
+                    seen_slots[slot_of[r]] += 1
+                    pb = prim_boxes[r]
+                    assert (lo <= pb[:3]).all() and (pb[3:] <= hi).all(), (w, k, r)
+            elif count[w, k] < 0:  # empty: +inf min, -inf max
                 assert np.all(lo == np.inf) and np.all(hi == -np.inf)
             elif count[w, k] == 0:
                 sub = boxes[child[w, k]]
-                used = count[child[w, k]] >= 0
+                used = count[child[w, k]] != -1
                 assert (lo[:, None] <= sub[:3, used]).all() and (sub[3:, used] <= hi[:, None]).all()  # nested
                 stack.append(int(child[w, k]))
             else:
@@ -225,12 +234,80 @@ def check_wide_tree(arrays, prim_boxes):
     assert (seen_slots == 1).all()  # the leaves partition prim_ref
 
 
+def check_packed_leaves(arrays):
+    """Each packed leaf row holds exactly its triangles' vertices, lane by lane, and its slot no longer points
+    into prim_ref; every triangle of the BVH is in one packed row or one plain leaf."""
+    link, leaves, leaf_link = np.asarray(arrays.wide_link), np.asarray(arrays.leaf_tris), np.asarray(arrays.leaf_link)
+    count = link[:, L.WIDE_COUNT:L.WIDE_COUNT + 4]
+    rows = link[:, L.WIDE_CHILD:L.WIDE_CHILD + 4][count == L.LEAF_PACKED]
+    assert sorted(rows) == list(range(len(leaves)))  # every packed row belongs to exactly one slot
+    covered = []
+    for row in rows:
+        base, mask = leaf_link[row, L.LEAF_BASE], leaf_link[row, L.LEAF_MASK]
+        assert mask in (1, 3, 7, 15)
+        for lane in range(int(mask).bit_length()):
+            np.testing.assert_array_equal(leaves[row, lane:36:4], arrays.tri_verts[base + lane])
+            covered.append(base + lane)
+    plain = [(f, c) for f, c in zip(link[:, L.WIDE_CHILD:L.WIDE_CHILD + 4][count > 0], count[count > 0])]
+    refs = arrays.prim_ref
+    covered += [int(r) for f, c in plain for r in refs[f:f + c] if r >= 0]
+    assert sorted(covered) == sorted(int(r) for r in refs if r >= 0)
+    assert len(rows) > 0
+
+
 def test_tree_invariants_mixed_scene(mixed):
     scene, _, compiled, *_ = mixed
     depth = check_tree(compiled, _prim_boxes(scene, compiled.arrays))
     assert depth >= 5  # a real tree, not one leaf
     check_wide_tree(compiled.arrays, _prim_boxes(scene, compiled.arrays))
+    check_packed_leaves(compiled.arrays)
     assert len(compiled.arrays.wide_nodes) < len(compiled.arrays.node_box) / 2.5  # ~3 binary levels per node
+
+
+def test_packed_triangle_test_vector_code_equals_scalar_twin(rng):
+    """`simd.tri4_test` compiled (<4 x double> code) against its interpreted body and against the scalar
+    watertight test of each lane: same hits at bit-identical distances, for rays aimed at the triangles, at their
+    edges and vertices (where the watertight rule decides), and with a t_max that cuts some hits off."""
+    import numba
+
+    from lumos.kernels.intersect import intersect_triangle, triangle_setup
+    from lumos.kernels.simd import tri4_test
+
+    @numba.njit
+    def compiled(leaves, j, o, setup, t_max):
+        kx, ky, kz, sx, sy, sz = setup
+        return tri4_test(leaves, j, kx, ky, kz, sx, sy, sz, o[kx], o[ky], o[kz], t_max)
+
+    n = 300
+    tris = _f32(rng.normal(size=(n, 4, 3, 3)))
+    tris[:, 1] = tris[:, 0]  # shared edges: lane 1 is lane 0 with its vertices cycled, lane 2 shares an edge
+    tris[:, 1] = tris[:, 0][:, [1, 2, 0]]
+    tris[:, 2, 0], tris[:, 2, 1] = tris[:, 0, 1], tris[:, 0, 0]
+    leaves = np.zeros((n, 48), np.float32)
+    for c in range(9):
+        leaves[:, 4 * c:4 * c + 4] = tris[:, :, c // 3, c % 3]
+    hits = 0
+    for i in range(n):
+        target = tris[i, i % 3]
+        w = rng.dirichlet([1, 1, 1]) if i % 4 else np.array([0.5, 0.5, 0.0])  # some through an edge
+        o = rng.normal(size=3) * 3
+        d = w @ target - o
+        setup = triangle_setup(d)
+        t_max = 1e30 if i % 3 else float(rng.uniform(0.3, 1.2))
+        got = compiled(leaves, i, (o[0], o[1], o[2]), setup, t_max)
+        kx, ky, kz, sx, sy, sz = setup
+        twin = tri4_test(leaves, i, kx, ky, kz, sx, sy, sz, o[kx], o[ky], o[kz], t_max)
+        assert got[0] == twin[0]
+        np.testing.assert_array_equal(np.array(got[1:])[[k for k in range(4) if got[0] >> k & 1]],
+                                      np.array(twin[1:])[[k for k in range(4) if got[0] >> k & 1]])
+        for k in range(4):
+            v = tris[i, k].reshape(1, 9).astype(np.float32)
+            t, _, _ = intersect_triangle((o[0], o[1], o[2]), setup, v, 0, t_max)
+            assert bool(got[0] >> k & 1) == (t != -1.0), (i, k)
+            if t != -1.0:
+                assert got[1 + k] == t
+                hits += 1
+    assert hits > 200
 
 
 def test_wide_box_test_vector_code_equals_scalar_twin(rng):

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import LumosError
 from ..kernels import layout as L
-from .bvh import build, pack_nodes, wide_nodes
+from .bvh import build, pack_nodes, packed_leaves, wide_nodes
 from .meshprep import prepare_mesh
 from .raster import RasterMesh, build_raster_mesh
 from .shapes import canonical, frame, rect_canonical, world_bounds
@@ -337,8 +337,10 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
         shape_mats = material_rows[shape_info[:, L.INFO_MATERIAL]]
         reads_uv = (shape_mats[:, L.MAT_TEXTURE] >= 0) | (shape_mats[:, L.MAT_BUMP] >= 0)
         shape_info[reads_uv, L.INFO_FLAGS] |= L.FLAG_READS_UV
+    all_tri_verts = np.ascontiguousarray(np.concatenate([tri_verts[tri_order], solid_tris[0]]))
+    leaf_tris, leaf_link = packed_leaves(wide_link, prim_ref, all_tri_verts)
     arrays = L.SceneArrays(
-        tri_verts=np.ascontiguousarray(np.concatenate([tri_verts[tri_order], solid_tris[0]])),
+        tri_verts=all_tri_verts,
         tri_normals=np.ascontiguousarray(np.concatenate([tri_normals[tri_order], solid_tris[1]])),
         tri_uvs=np.ascontiguousarray(np.concatenate([tri_uvs[tri_order], solid_tris[2]])),
         tri_info=np.ascontiguousarray(np.concatenate([tri_info[tri_order], solid_tris[3]])),
@@ -349,6 +351,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
         node_link=node_link,
         wide_nodes=wide_box,
         wide_link=wide_link,
+        leaf_tris=leaf_tris,
+        leaf_link=leaf_link,
         unbounded=unbounded,
         materials=material_rows,
         light_kind=light_kind,

@@ -45,3 +45,24 @@ def wide_nodes(node_box: np.ndarray, node_link: np.ndarray):
     links[:, WIDE_CHILD:WIDE_CHILD + 4] = child
     links[:, WIDE_COUNT:WIDE_COUNT + 4] = count
     return packed, links
+
+
+def packed_leaves(wide_link: np.ndarray, prim_ref: np.ndarray, tri_verts: np.ndarray):
+    """Packed rows for the wide tree's triangle leaves (`kernels.bvh_build.pack_leaves`; rewrites those slots of
+    `wide_link` in place): (float32 (nl, 48) on 64-byte boundaries, its int32 view) — see `kernels.layout.LEAF_*`."""
+    from ..kernels.bvh_build import pack_leaves
+    from ..kernels.layout import LEAF_BASE, LEAF_MASK, WIDE_CHILD, WIDE_COUNT
+
+    capacity = 4 * len(wide_link)
+    raw = np.zeros(capacity * 48 + 16, np.float32)
+    skip = (-raw.ctypes.data % 64) // 4
+    packed = raw[skip:skip + capacity * 48].reshape(capacity, 48)
+    n = pack_leaves(wide_link, WIDE_CHILD, WIDE_COUNT, prim_ref, tri_verts, packed, packed.view(np.int32),
+                    LEAF_BASE, LEAF_MASK)
+    if n < capacity:  # keep the alignment: copy into a fresh aligned block of the right size
+        raw = np.zeros(n * 48 + 16, np.float32)
+        skip = (-raw.ctypes.data % 64) // 4
+        small = raw[skip:skip + n * 48].reshape(n, 48)
+        small[:] = packed[:n]
+        packed = small
+    return packed, packed.view(np.int32)

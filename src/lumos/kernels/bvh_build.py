@@ -13,6 +13,7 @@ Parallelism: the top of the tree is built first (large nodes bin in parallel chu
 import numpy as np
 
 from .jit import njit_alloc, njit_parallel, prange
+from .layout import LEAF_PACKED
 
 #: Trees deeper than this make leaves (the traversal stack is 64 entries; one push per level at most).
 MAX_DEPTH = 60
@@ -403,3 +404,37 @@ def collapse_wide(node_box, node_link, first_col, count_col):
                 n_todo += 1
                 n_wide += 1
     return boxes[:n_wide], child[:n_wide], count[:n_wide]
+
+
+@njit_alloc
+def pack_leaves(wide_link, child_col, count_col, prim_ref, tri_verts, packed, packed_link, base_col, mask_col):
+    """Give every wide leaf of one to four triangles (and nothing else) its own packed row for `simd.tri4_test`:
+    packed float32 (nl, >= 36) rows of four lanes (v0.x, v0.y, v0.z, v1.x, ..., v2.z; spare lanes repeat the
+    first triangle), packed_link its int32 view with the first triangle's index in `base_col` (a leaf's triangles
+    are consecutive: the compile step numbers them in leaf order) and the mask of real lanes in `mask_col`. The
+    slot's count becomes LEAF_PACKED and its child the packed row. Returns the number of rows used."""
+    n = 0
+    for w in range(wide_link.shape[0]):
+        for k in range(4):
+            count = wide_link[w, count_col + k]
+            if count <= 0 or count > 4:
+                continue
+            first = wide_link[w, child_col + k]
+            ok = True
+            for i in range(first, first + count):
+                if prim_ref[i] < 0 or prim_ref[i] != prim_ref[first] + (i - first):
+                    ok = False
+            if not ok:
+                continue
+            base = prim_ref[first]
+            for lane in range(4):
+                r = base + (lane if lane < count else 0)
+                for c in range(9):  # vertex c // 3, axis c % 3 -> row c
+                    packed[n, 4 * c + lane] = tri_verts[r, c]
+            packed_link[n, base_col] = base
+            packed_link[n, mask_col] = (1 << count) - 1
+            wide_link[w, child_col + k] = n
+            wide_link[w, count_col + k] = LEAF_PACKED
+            n += 1
+    return n
+

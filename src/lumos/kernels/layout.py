@@ -102,6 +102,14 @@ NODE_COUNT = 7
 # or first prim_ref entry; WIDE_COUNT..+3: its leaf primitive count (0: a wide node; -1: an empty slot).
 WIDE_CHILD = 24
 WIDE_COUNT = 28
+# A leaf of one to four triangles has a packed row (`compile.bvh.packed_leaves`) that `kernels.simd.tri4_test`
+# tests at once: its wide slot holds count LEAF_PACKED and the row's index. Rows are 48 float32 (192 bytes) on
+# 64-byte boundaries: columns 0-35 the triangles' coordinates as nine rows of four lanes (v0.x, v0.y, v0.z,
+# v1.x, ..., v2.z), int32 column LEAF_BASE the first triangle's index (the others follow it), LEAF_MASK the
+# mask of lanes that hold a triangle.
+LEAF_PACKED = -2
+LEAF_BASE = 36
+LEAF_MASK = 37
 
 SceneArrays = namedtuple(
     "SceneArrays",
@@ -118,6 +126,8 @@ SceneArrays = namedtuple(
         "node_link",  # int32 (nn, 8): an int32 view of node_box; columns NODE_FIRST, NODE_COUNT
         "wide_nodes",  # float32 (nw, 32): the 4-wide tree, see WIDE_*
         "wide_link",  # int32 (nw, 32): an int32 view of wide_nodes
+        "leaf_tris",  # float32 (nl, 48): packed triangle leaves, see LEAF_*
+        "leaf_link",  # int32 (nl, 48): an int32 view of leaf_tris
         "unbounded",  # int32 (nu,): shapes tested outside the BVH
         "materials",  # float64 (nm, MAT_SIZE)
         "light_kind",  # int32 (nl,)
@@ -143,7 +153,7 @@ SceneArrays = namedtuple(
 Geometry = namedtuple(
     "Geometry",
     ["node_box", "node_link", "prim_ref", "tri_verts", "shape_xform", "shape_info", "unbounded", "csg_nodes",
-     "wide_nodes", "wide_link"],
+     "wide_nodes", "wide_link", "leaf_tris", "leaf_link"],
 )
 #: What turns a hit into a surface (surface_at).
 Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_info", "shape_xform", "shape_info"])

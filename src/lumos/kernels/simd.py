@@ -109,3 +109,108 @@ def _box4_vector(typingctx, nodes, j, near_x, near_y, near_z, ox, oy, oz, ix, iy
 
     return sig, codegen
 
+
+
+def tri4_test(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
+    """(mask, t0, t1, t2, t3): the watertight test (`intersect.intersect_triangle`) of one ray against the four
+    triangles of packed leaf j at once; bit k of mask is set where triangle k is hit with 0 < t <= t_max, tk its
+    distance. `leaves` is float32 (n, >= 36): rows of four lanes v0.x, v0.y, v0.z, v1.x, ..., v2.z; kx, ky, kz
+    and sx, sy, sz are the ray's shear constants (`intersect.triangle_setup`), okx, oky, okz its origin's
+    components on those axes. Lane for lane the same operations in the same order and precision as the scalar
+    test, so the same triangles are hit at the same distances (barycentrics: ask the scalar test of the lane).
+
+    This Python body is the interpreted twin; compiled code gets `_tri4_vector` through the overload below."""
+    row = leaves[j]
+    mask = 0
+    out = [0.0, 0.0, 0.0, 0.0]
+    for k in range(4):
+        ax = float(row[4 * kx + k]) - okx
+        ay = float(row[4 * ky + k]) - oky
+        az = float(row[4 * kz + k]) - okz
+        bx = float(row[12 + 4 * kx + k]) - okx
+        by = float(row[12 + 4 * ky + k]) - oky
+        bz = float(row[12 + 4 * kz + k]) - okz
+        cx = float(row[24 + 4 * kx + k]) - okx
+        cy = float(row[24 + 4 * ky + k]) - oky
+        cz = float(row[24 + 4 * kz + k]) - okz
+        ax, ay = ax - sx * az, ay - sy * az
+        bx, by = bx - sx * bz, by - sy * bz
+        cx, cy = cx - sx * cz, cy - sy * cz
+        e0 = cx * by - cy * bx
+        e1 = ax * cy - ay * cx
+        e2 = bx * ay - by * ax
+        if (e0 < 0.0 or e1 < 0.0 or e2 < 0.0) and (e0 > 0.0 or e1 > 0.0 or e2 > 0.0):
+            continue
+        det = e0 + e1 + e2
+        if det == 0.0:
+            continue
+        t_scaled = (e0 * az + e1 * bz + e2 * cz) * sz
+        if det < 0.0:
+            if t_scaled >= 0.0 or t_scaled < t_max * det:
+                continue
+        elif t_scaled <= 0.0 or t_scaled > t_max * det:
+            continue
+        out[k] = t_scaled * (1.0 / det)
+        mask |= 1 << k
+    return mask, out[0], out[1], out[2], out[3]
+
+
+@overload(tri4_test, inline="always")
+def _tri4_test_jit(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
+    def impl(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
+        return _tri4_vector(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
+
+    return impl
+
+
+@intrinsic
+def _tri4_vector(typingctx, leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
+    """`tri4_test` in LLVM vector IR."""
+    f64 = types.float64
+    sig = types.Tuple((types.int64, f64, f64, f64, f64))(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
+
+    def codegen(context, builder, signature, args):
+        leaves_v, j_v, kx_v, ky_v, kz_v, sx_v, sy_v, sz_v, okx_v, oky_v, okz_v, tmax_v = args
+        ary = context.make_array(signature.args[0])(context, builder, leaves_v)
+        i64 = ir.IntType(64)
+        row = cgutils.get_item_pointer(context, builder, signature.args[0], ary, [j_v, ir.Constant(i64, 0)],
+                                       wraparound=False)
+        four = ir.Constant(i64, 4)
+
+        def load(vertex, axis, origin):  # lanes of vertex.axis, widened, minus the origin's component
+            offset = builder.add(ir.Constant(i64, 12 * vertex), builder.mul(axis, four))
+            ptr = builder.bitcast(builder.gep(row, [offset]), _F32x4.as_pointer())
+            return builder.fsub(builder.fpext(builder.load(ptr, align=4), _F64x4), _splat(builder, origin))
+
+        sx4, sy4, sz4 = _splat(builder, sx_v), _splat(builder, sy_v), _splat(builder, sz_v)
+        fsub, fmul, fadd = builder.fsub, builder.fmul, builder.fadd
+        ax, ay, az = load(0, kx_v, okx_v), load(0, ky_v, oky_v), load(0, kz_v, okz_v)
+        bx, by, bz = load(1, kx_v, okx_v), load(1, ky_v, oky_v), load(1, kz_v, okz_v)
+        cx, cy, cz = load(2, kx_v, okx_v), load(2, ky_v, oky_v), load(2, kz_v, okz_v)
+        ax, ay = fsub(ax, fmul(sx4, az)), fsub(ay, fmul(sy4, az))
+        bx, by = fsub(bx, fmul(sx4, bz)), fsub(by, fmul(sy4, bz))
+        cx, cy = fsub(cx, fmul(sx4, cz)), fsub(cy, fmul(sy4, cz))
+        e0 = fsub(fmul(cx, by), fmul(cy, bx))
+        e1 = fsub(fmul(ax, cy), fmul(ay, cx))
+        e2 = fsub(fmul(bx, ay), fmul(by, ax))
+        zero = ir.Constant(_F64x4, [0.0] * 4)
+        lt = lambda a, b: builder.fcmp_ordered("<", a, b)  # noqa: E731
+        gt = lambda a, b: builder.fcmp_ordered(">", a, b)  # noqa: E731
+        any_neg = builder.or_(builder.or_(lt(e0, zero), lt(e1, zero)), lt(e2, zero))
+        any_pos = builder.or_(builder.or_(gt(e0, zero), gt(e1, zero)), gt(e2, zero))
+        det = fadd(fadd(e0, e1), e2)
+        t_scaled = fmul(fadd(fadd(fmul(e0, az), fmul(e1, bz)), fmul(e2, cz)), sz4)
+        limit = fmul(_splat(builder, tmax_v), det)
+        negative = lt(det, zero)
+        # det < 0: reject t_scaled >= 0 or t_scaled < limit; det >= 0: reject t_scaled <= 0 or t_scaled > limit
+        reject_neg = builder.or_(builder.fcmp_ordered(">=", t_scaled, zero), lt(t_scaled, limit))
+        reject_pos = builder.or_(builder.fcmp_ordered("<=", t_scaled, zero), gt(t_scaled, limit))
+        reject = builder.or_(builder.and_(any_neg, any_pos), builder.fcmp_ordered("==", det, zero))
+        reject = builder.or_(reject, builder.select(negative, reject_neg, reject_pos))
+        hit = builder.xor(reject, ir.Constant(ir.VectorType(ir.IntType(1), 4), [1, 1, 1, 1]))
+        t = fmul(t_scaled, builder.fdiv(ir.Constant(_F64x4, [1.0] * 4), det))
+        mask = builder.zext(builder.bitcast(hit, ir.IntType(4)), i64)
+        lanes = [builder.extract_element(t, ir.Constant(ir.IntType(32), k)) for k in range(4)]
+        return context.make_tuple(builder, signature.return_type, [mask] + lanes)
+
+    return sig, codegen

@@ -20,6 +20,9 @@ from .layout import (
     INFO_KIND,
     INFO_LIGHT,
     INFO_MATERIAL,
+    LEAF_BASE,
+    LEAF_MASK,
+    LEAF_PACKED,
     MAT_KT,
     SHAPE_BOX,
     SHAPE_CONE,
@@ -29,7 +32,7 @@ from .layout import (
     WIDE_CHILD,
     WIDE_COUNT,
 )
-from .simd import box4_test
+from .simd import box4_test, tri4_test
 from .vec import xform_point, xform_vector
 
 #: Transmittance below which a shadow ray counts as blocked.
@@ -84,6 +87,8 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
         ix, iy, iz, ox, oy, oz, nx, ny, nz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5], rb[6], rb[7], rb[8]
         nx, ny, nz = 4 * nx, 4 * ny, 4 * nz  # box_setup's near column (0/3, 1/4, 2/5) -> the node's near row
         setup = _triangle_setup_if(geo, d)
+        kx, ky, kz, sx, sy, sz = setup
+        okx, oky, okz = o[kx], o[ky], o[kz]
         node = np.int64(0)  # a wide node index (>= 0) or ~(4·node + slot) for a leaf child (int64 throughout)
         sp = 0
         while True:
@@ -108,11 +113,28 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
                     node = stack[sp]
                     continue
             else:
-                # leaf: test its primitives
+                # leaf: test its primitives, four triangles at once where it has a packed row
                 q = ~node
                 w = q >> 2
                 first = np.int64(link[w, WIDE_CHILD + (q & 3)])
-                for k in range(first, first + link[w, WIDE_COUNT + (q & 3)]):
+                count = link[w, WIDE_COUNT + (q & 3)]
+                if count == LEAF_PACKED:
+                    mask, t0, t1, t2, t3 = tri4_test(geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz,
+                                                     best_t)
+                    mask &= geo.leaf_link[first, LEAF_MASK]
+                    lane, lane_t = -1, best_t
+                    for k in range(4):
+                        if mask & (1 << k):
+                            tk = t0 if k == 0 else (t1 if k == 1 else (t2 if k == 2 else t3))
+                            if tk > t_min and tk <= lane_t:
+                                lane, lane_t = k, tk
+                    if lane >= 0:  # the nearest lane again, scalar: the same t, and its barycentrics
+                        r = np.int64(geo.leaf_link[first, LEAF_BASE]) + lane
+                        t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, best_t)
+                        if t > t_min:
+                            best_t, best_ref, best_b1, best_b2, hit = t, r, b1, b2, True
+                    count = 0
+                for k in range(first, first + count):
                     r = geo.prim_ref[k]
                     if r >= 0:
                         t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, best_t)
@@ -222,6 +244,8 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
     ix, iy, iz, ox, oy, oz, nx, ny, nz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5], rb[6], rb[7], rb[8]
     nx, ny, nz = 4 * nx, 4 * ny, 4 * nz
     setup = _triangle_setup_if(geo, d)
+    kx, ky, kz, sx, sy, sz = setup
+    okx, oky, okz = o[kx], o[ky], o[kz]
     node = np.int64(0)  # as in closest_hit: a wide node, or ~(4·node + slot) for a leaf child
     sp = 0
     while True:
@@ -236,7 +260,22 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
             q = ~node
             w = q >> 2
             first = np.int64(link[w, WIDE_CHILD + (q & 3)])
-            for k in range(first, first + link[w, WIDE_COUNT + (q & 3)]):
+            count = link[w, WIDE_COUNT + (q & 3)]
+            if count == LEAF_PACKED:
+                mask, t0, t1, t2, t3 = tri4_test(geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
+                mask &= geo.leaf_link[first, LEAF_MASK]
+                for k in range(4):
+                    if mask & (1 << k):
+                        tk = t0 if k == 0 else (t1 if k == 1 else (t2 if k == 2 else t3))
+                        if tk <= t_min:
+                            continue
+                        f0, f1, f2 = _triangle_factor(tri_info, materials, np.int64(geo.leaf_link[first, LEAF_BASE])
+                                                      + k)
+                        tr, tg, tb = tr * f0, tg * f1, tb * f2
+                        if max(tr, tg, tb) < SHADOW_CUTOFF:
+                            return (0.0, 0.0, 0.0), True
+                count = 0
+            for k in range(first, first + count):
                 r = geo.prim_ref[k]
                 if r >= 0:
                     t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)

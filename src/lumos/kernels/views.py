@@ -7,7 +7,7 @@ from .layout import Geometry, Lighting, Surfaces, Textures
 @njit
 def geometry_of(sa):
     return Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info, sa.unbounded,
-                    sa.csg_nodes, sa.wide_nodes, sa.wide_link)
+                    sa.csg_nodes, sa.wide_nodes, sa.wide_link, sa.leaf_tris, sa.leaf_link)
 
 
 @njit
@@ -32,7 +32,7 @@ def owned_views(sa):
     device-function views above hold none (they are built inside each parallel loop's body), and a serial caller
     with the runtime would release references it never took."""
     return (Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info,
-                     sa.unbounded, sa.csg_nodes, sa.wide_nodes, sa.wide_link),
+                     sa.unbounded, sa.csg_nodes, sa.wide_nodes, sa.wide_link, sa.leaf_tris, sa.leaf_link),
             Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info),
             Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars),
             Textures(sa.tex_info, sa.tex_pixels, sa.tri_tangents))
