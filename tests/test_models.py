@@ -115,6 +115,33 @@ def test_bunny_scene_is_framed_from_plus_z():
     assert scene.source == BUNNY
 
 
+def _quad(corners):
+    return {"type": "mesh", "vertices": np.asarray(corners, float), "faces": np.array([[0, 1, 2], [0, 2, 3]])}
+
+
+def test_one_sided_models_are_seen_from_the_side_their_faces_show():
+    """A floor is not framed edge-on, a wall facing -z not from behind; a closed surface keeps the +z front
+    view; the direction is a unit vector and the floor's camera looks down at TILT degrees."""
+    floor = _quad([[-1, 0, 1], [1, 0, 1], [1, 0, -1], [-1, 0, -1]])  # counter-clockwise seen from above: +y
+    ceiling = _quad([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]])
+    back = _quad([[-1, -1, 0], [-1, 1, 0], [1, 1, 0], [1, -1, 0]])  # faces -z
+    side = _quad([[0, -1, -1], [0, -1, 1], [0, 1, 1], [0, 1, -1]])  # faces -x
+    c = math.cos(math.radians(from_model.TILT))
+    s = math.sin(math.radians(from_model.TILT))
+    np.testing.assert_allclose(from_model.view_direction([floor]), [0, s, c], atol=1e-12)
+    np.testing.assert_allclose(from_model.view_direction([ceiling]), [0, -s, c], atol=1e-12)
+    np.testing.assert_allclose(from_model.view_direction([back]), [0, 0, -1], atol=1e-12)
+    np.testing.assert_allclose(from_model.view_direction([side]), [-s, 0, c], atol=1e-12)
+    np.testing.assert_allclose(from_model.view_direction([back, _quad([[-1, -1, 1], [1, -1, 1], [1, 1, 1],
+                                                                         [-1, 1, 1]])]), [0, 0, 1])  # balanced
+    bunny = lumos.load_scene(BUNNY)  # nearly closed: the front view
+    np.testing.assert_allclose(from_model.view_direction([{"type": "mesh", "vertices": bunny.objects[0].vertices,
+                                                           "faces": bunny.objects[0].faces}]), [0, 0, 1])
+    # what `lumos render floor.ply` gets: a camera above the floor's plane looking down at it
+    cam = from_model.scene_from_model(ImportedModel(source=Path("floor.obj"), objects=[floor]))[0]["camera"]
+    assert cam["position"][1] > 0 and cam["position"][2] > 0
+
+
 def test_framing_closed_form():
     """A sphere of radius r seen from distance d subtends asin(r/d): the bounding sphere spans 1/MARGIN of the
     field of view's half-height (in tangent terms, what the image shows)."""

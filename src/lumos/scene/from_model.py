@@ -7,7 +7,10 @@ Pure Python (NumPy for the vertex bounds; never Numba). The scene built for a ba
 - **camera**: the file's first camera if it has one; otherwise a front view from +z looking towards −z with y up
   (the OBJ and glTF convention), vertical fov 40°, at the distance where the model's bounding sphere (centred
   on its bounding box) fills the frame's height with a 10% margin (`MARGIN`). Wider-than-tall images show all of
-  it; a portrait image crops the sides.
+  it; a portrait image crops the sides. An open model whose faces mostly face one way (`view_direction`: a
+  floor, a wall, a backdrop or a Cornell box open on one side) is looked at from the side its faces show: from
+  −z when they face −z, and from the front raised or swung by 40° (`TILT`) when they face up, down or sideways,
+  so that a floor is not seen edge-on and a backdrop not from behind.
 - **lights**: the file's own lights if it has them; otherwise, unless the model's own emissive materials are
   meant to light it, a three-point set-up around the bounding sphere (`three_point_lights`): a key light
   up-left-front, a weaker fill from the right, a rim light from behind and above, point lights without fall-off,
@@ -93,13 +96,56 @@ def bounding_sphere(objects: list[dict]) -> tuple[np.ndarray, float]:
     return center, radius
 
 
-def framing_camera(center: np.ndarray, radius: float, fov: float = FOV, margin: float = MARGIN) -> dict:
-    """A perspective camera on the +z side of `center`, looking along −z with y up, at the distance where a
-    sphere of `radius` spans 1/`margin` of the vertical field of view `fov` (degrees)."""
+def framing_camera(center: np.ndarray, radius: float, fov: float = FOV, margin: float = MARGIN,
+                   direction=(0.0, 0.0, 1.0)) -> dict:
+    """A perspective camera on the `direction` side of `center` (default +z: looking along −z), y up, at the
+    distance where a sphere of `radius` spans 1/`margin` of the vertical field of view `fov` (degrees)."""
     distance = margin * radius / math.sin(math.radians(fov) / 2)
-    position = center + np.array([0.0, 0.0, distance])
+    position = center + distance * np.asarray(direction, dtype=np.float64)
     return {"type": "perspective", "position": _vec(position), "look_at": _vec(center), "up": [0.0, 1.0, 0.0],
             "fov": fov}
+
+
+#: How far (degrees) the front view is raised or swung towards a model whose faces mostly face up, down or
+#: sideways; and how one-sided (|mean unit normal|, 0 for a closed surface) a model must be to be turned to.
+TILT = 40.0
+ONE_SIDED = 0.3
+
+
+def view_direction(objects: list[dict]) -> np.ndarray:
+    """Unit (3,) direction from the model's centre to the framing camera: +z, unless the area-weighted mean of
+    the meshes' face normals (their winding, counter-clockwise as the file gives it) is at least ONE_SIDED long
+    (a closed surface's is 0): then from the side the faces show, −z when they face mostly −z, else the front
+    view raised (faces up), lowered (faces down) or swung left or right by TILT degrees."""
+    total, area = np.zeros(3), 0.0
+    for obj in objects:
+        if obj.get("type") != "mesh" or obj.get("vertices") is None or obj.get("faces") is None:
+            continue
+        v = np.asarray(obj["vertices"], dtype=np.float64).reshape(-1, 3)
+        m = object_matrix(obj)
+        if m is not None:
+            v = v @ m[:3, :3].T + m[:3, 3]
+        try:
+            f = np.asarray(obj["faces"], dtype=np.int64).reshape(-1, 3)
+        except ValueError:  # polygons: the scene model triangulates them; count only the framing's triangles
+            continue
+        if not len(f) or f.min() < 0 or f.max() >= len(v):
+            continue
+        n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # 2 × area × unit normal
+        n = n[np.all(np.isfinite(n), axis=1)]
+        total += n.sum(axis=0)
+        area += float(np.linalg.norm(n, axis=1).sum())
+    if not area > 0 or np.linalg.norm(total) < ONE_SIDED * area:
+        return np.array([0.0, 0.0, 1.0])
+    mean = total / area
+    axis = int(np.argmax(np.abs(mean)))
+    side = 1.0 if mean[axis] > 0 else -1.0
+    if axis == 2:
+        return np.array([0.0, 0.0, side])
+    tilt = math.radians(TILT)
+    out = np.array([0.0, 0.0, math.cos(tilt)])
+    out[axis] = side * math.sin(tilt)
+    return out
 
 
 #: (direction from the centre, intensity) of the key, fill and rim lights of `three_point_lights`.
@@ -147,7 +193,7 @@ def scene_from_model(model) -> tuple[dict, str]:
         camera = dict(model.cameras[0])
         about.append("the file's camera")
     else:
-        camera = framing_camera(center, radius)
+        camera = framing_camera(center, radius, direction=view_direction(objects))
         about.append("a front camera framing the bounds")
     self_lit = not model.lights and emits(materials, objects)
     if model.lights:
