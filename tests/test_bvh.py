@@ -266,7 +266,7 @@ def test_tree_invariants_mixed_scene(mixed):
 
 def test_packed_triangle_test_vector_code_equals_scalar_twin(rng):
     """`simd.tri4_test` compiled (<4 x double> code) against its interpreted body and against the scalar
-    watertight test of each lane: same hits at bit-identical distances, for rays aimed at the triangles, at their
+    watertight test of each lane: same hits at bit-identical distances and barycentrics, for rays aimed at the triangles, at their
     edges and vertices (where the watertight rule decides), and with a t_max that cuts some hits off."""
     import numba
 
@@ -298,14 +298,16 @@ def test_packed_triangle_test_vector_code_equals_scalar_twin(rng):
         kx, ky, kz, sx, sy, sz = setup
         twin = tri4_test(leaves, i, kx, ky, kz, sx, sy, sz, o[kx], o[ky], o[kz], t_max)
         assert got[0] == twin[0]
-        np.testing.assert_array_equal(np.array(got[1:])[[k for k in range(4) if got[0] >> k & 1]],
-                                      np.array(twin[1:])[[k for k in range(4) if got[0] >> k & 1]])
+        lanes = [k for k in range(4) if got[0] >> k & 1]
+        for start in (1, 5, 9):
+            np.testing.assert_array_equal(np.array(got[start:start + 4])[lanes],
+                                          np.array(twin[start:start + 4])[lanes])
         for k in range(4):
             v = tris[i, k].reshape(1, 9).astype(np.float32)
-            t, _, _ = intersect_triangle((o[0], o[1], o[2]), setup, v, 0, t_max)
+            t, b1, b2 = intersect_triangle((o[0], o[1], o[2]), setup, v, 0, t_max)
             assert bool(got[0] >> k & 1) == (t != -1.0), (i, k)
             if t != -1.0:
-                assert got[1 + k] == t
+                assert (got[1 + k], got[5 + k], got[9 + k]) == (t, b1, b2)  # distance and barycentrics
                 hits += 1
     assert hits > 200
 

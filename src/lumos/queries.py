@@ -403,15 +403,16 @@ def _rays(origins, directions):
     o, d = np.atleast_2d(o), np.atleast_2d(d)
     if len(o) != len(d) and 1 not in (len(o), len(d)):
         raise LumosError(f"origins and directions: {len(o)} origins but {len(d)} directions")
-    o, d = np.broadcast_arrays(o, d)
-    for arr, what in ((o, "origins"), (d, "directions")):
-        bad = ~np.isfinite(arr).all(axis=1)
-        if bad.any():
-            raise LumosError(f"{what}[{int(np.argmax(bad))}]: not finite (NaN or Inf): {arr[np.argmax(bad)]}")
-    zero = ~(d != 0.0).any(axis=1)
-    if zero.any():
-        raise LumosError(f"directions[{int(np.argmax(zero))}]: a zero vector has no direction")
-    return np.ascontiguousarray(o), np.ascontiguousarray(d)
+    o, d = (np.ascontiguousarray(a) for a in np.broadcast_arrays(o, d))
+    from .kernels.queries import bad_rays
+
+    bad_o, bad_d, zero = bad_rays(o, d)
+    for bad, arr, what in ((bad_o, o, "origins"), (bad_d, d, "directions")):
+        if bad >= 0:
+            raise LumosError(f"{what}[{bad}]: not finite (NaN or Inf): {arr[bad]}")
+    if zero >= 0:
+        raise LumosError(f"directions[{zero}]: a zero vector has no direction")
+    return o, d
 
 
 def _points(points):

@@ -84,8 +84,18 @@ def _bin_parallel(order, start, end, bounds, cent, cbox, scale, bin_box, bin_cou
 
 
 @njit_alloc
+def _blocks(n):
+    """SAH cost of testing n primitives in a leaf: the packed leaf test (`simd.tri4_test`) takes four triangles
+    at the price of one, so the cost counts blocks of four, ceil(n / 4), not primitives (Embree's SAH does the
+    same for its four-wide leaves). With a traversal step costing one block, every node of at most four
+    primitives becomes a leaf, and leaves come out full."""
+    return (n + 3) // 4
+
+
+@njit_alloc
 def _best_split(bin_box, bin_count, cbox, right_area, acc):
-    """Sweep the bins; returns (cost, axis, split bin) minimising A_L·N_L + A_R·N_R (not yet divided by A)."""
+    """Sweep the bins; returns (cost, axis, split bin) minimising A_L·B(N_L) + A_R·B(N_R) (not yet divided by
+    A), B(N) the number of four-primitive blocks the leaf test needs (`_blocks`)."""
     n_bins = bin_count.shape[1]
     best_cost = np.inf
     best_axis = -1
@@ -108,7 +118,7 @@ def _best_split(bin_box, bin_count, cbox, right_area, acc):
             _grow(acc, bin_box[a, b])
             if n_left == 0 or n_right == 0:
                 continue
-            cost = _half_area(acc) * n_left + right_area[b + 1] * n_right
+            cost = _half_area(acc) * _blocks(n_left) + right_area[b + 1] * _blocks(n_right)
             if cost < best_cost:
                 best_cost, best_axis, best_split = cost, a, b + 1
     return best_cost, best_axis, best_split
@@ -214,7 +224,7 @@ def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order,
         # stage 2: a leaf when splitting does not pay (SAH) or is impossible
         area = _half_area(box)
         split_cost = cost_traversal + (cost / area if area > 0.0 else 0.0)
-        leaf = count == 1 or depth >= MAX_DEPTH or (count <= max_leaf and (axis < 0 or count <= split_cost))
+        leaf = count == 1 or depth >= MAX_DEPTH or (count <= max_leaf and (axis < 0 or _blocks(count) <= split_cost))
         if leaf:
             node_link[node, 0] = start
             node_link[node, 1] = count

@@ -37,6 +37,7 @@ from .intersect import (
 from .jit import njit, njit_inline, njit_parallel, prange
 from .layout import (
     FLAG_CAPPED,
+    FLAG_UVS,
     INFO_FLAGS,
     INFO_KIND,
     INFO_OBJECT,
@@ -54,7 +55,7 @@ from .layout import (
 )
 from .surface import surface_at
 from .traverse import closest_hit
-from .vec import xform_point, xform_vector
+from .vec import cross, madd, normalize, xform_point, xform_vector
 from .views import geometry_of, surfaces_of
 
 _CHUNK = 256
@@ -65,6 +66,26 @@ _FAR = 1e300
 _ENTER = 1  # the crossing enters a solid (or, on an open surface, meets its front)
 _MESH = 2  # a triangle hit: its "entering" is decided by parity (closed meshes) after the sweep
 _DROP = 4  # a repeat of the crossing before it
+
+
+# ------------------------------------------------------------------------------------------- input checks
+
+
+@njit
+def bad_rays(origins, directions):
+    """(first ray with a non-finite origin, first with a non-finite direction, first with a zero direction), each
+    -1 if there is none: one pass over float64 (n, 3) + (n, 3), instead of NumPy's temporary arrays."""
+    bad_o, bad_d, zero = -1, -1, -1
+    for i in range(origins.shape[0]):
+        ox, oy, oz = origins[i, 0], origins[i, 1], origins[i, 2]
+        dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
+        if bad_o < 0 and not (np.isfinite(ox) and np.isfinite(oy) and np.isfinite(oz)):
+            bad_o = i
+        if bad_d < 0 and not (np.isfinite(dx) and np.isfinite(dy) and np.isfinite(dz)):
+            bad_d = i
+        if zero < 0 and dx == 0.0 and dy == 0.0 and dz == 0.0:
+            zero = i
+    return bad_o, bad_d, zero
 
 
 # ------------------------------------------------------------------------------------------- closest hits
@@ -95,7 +116,10 @@ def closest_kernel(sa, tri_prim, origins, directions, t_max, t_out, object_out, 
                 uv_out[i, 0] = np.nan
                 uv_out[i, 1] = np.nan
                 continue
-            p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
+            if ref >= 0:  # a triangle: only what the hit record holds (no shading normal)
+                p, n_geo, u, v, obj = _triangle_record(surf, o, d, t, ref, b1, b2)
+            else:
+                p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
             t_out[i] = t
             object_out[i] = obj
             prim_out[i] = _prim_of(sa, tri_prim, ref, part)
@@ -104,6 +128,24 @@ def closest_kernel(sa, tri_prim, origins, directions, t_max, t_out, object_out, 
                 normal_out[i, k] = n_geo[k]
             uv_out[i, 0] = u
             uv_out[i, 1] = v
+
+
+@njit_inline
+def _triangle_record(surf, o, d, t, ref, b1, b2):
+    """(point, unit geometric normal, u, v, object id) of a hit on triangle ref: `surface_at`'s answer without
+    the shading normal, which a ray query does not report (one cache line fewer per incoherent hit)."""
+    vt = surf.tri_verts
+    v0 = (np.float64(vt[ref, 0]), np.float64(vt[ref, 1]), np.float64(vt[ref, 2]))
+    e1 = (vt[ref, 3] - v0[0], vt[ref, 4] - v0[1], vt[ref, 5] - v0[2])
+    e2 = (vt[ref, 6] - v0[0], vt[ref, 7] - v0[1], vt[ref, 8] - v0[2])
+    info = surf.tri_info[ref]
+    u, v = b1, b2
+    if info[INFO_FLAGS] & FLAG_UVS:
+        uv = surf.tri_uvs
+        b0 = 1.0 - b1 - b2
+        u = b0 * uv[ref, 0] + b1 * uv[ref, 2] + b2 * uv[ref, 4]
+        v = b0 * uv[ref, 1] + b1 * uv[ref, 3] + b2 * uv[ref, 5]
+    return madd(o, d, t), normalize(cross(e1, e2)), u, v, info[INFO_OBJECT]
 
 
 @njit_inline

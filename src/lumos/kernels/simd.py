@@ -112,17 +112,17 @@ def _box4_vector(typingctx, nodes, j, near_x, near_y, near_z, ox, oy, oz, ix, iy
 
 
 def tri4_test(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
-    """(mask, t0, t1, t2, t3): the watertight test (`intersect.intersect_triangle`) of one ray against the four
-    triangles of packed leaf j at once; bit k of mask is set where triangle k is hit with 0 < t <= t_max, tk its
-    distance. `leaves` is float32 (n, >= 36): rows of four lanes v0.x, v0.y, v0.z, v1.x, ..., v2.z; kx, ky, kz
+    """(mask, t0, t1, t2, t3, b1_0, ..., b1_3, b2_0, ..., b2_3): the watertight test
+    (`intersect.intersect_triangle`) of one ray against the four triangles of packed leaf j at once; bit k of
+    mask is set where triangle k is hit with 0 < t <= t_max, tk its distance and b1_k, b2_k its barycentrics. `leaves` is float32 (n, >= 36): rows of four lanes v0.x, v0.y, v0.z, v1.x, ..., v2.z; kx, ky, kz
     and sx, sy, sz are the ray's shear constants (`intersect.triangle_setup`), okx, oky, okz its origin's
     components on those axes. Lane for lane the same operations in the same order and precision as the scalar
-    test, so the same triangles are hit at the same distances (barycentrics: ask the scalar test of the lane).
+    test, so the same triangles are hit at the same distances and barycentrics, bit for bit.
 
     This Python body is the interpreted twin; compiled code gets `_tri4_vector` through the overload below."""
     row = leaves[j]
     mask = 0
-    out = [0.0, 0.0, 0.0, 0.0]
+    out = [0.0] * 12
     for k in range(4):
         ax = float(row[4 * kx + k]) - okx
         ay = float(row[4 * ky + k]) - oky
@@ -150,9 +150,11 @@ def tri4_test(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
                 continue
         elif t_scaled <= 0.0 or t_scaled > t_max * det:
             continue
-        out[k] = t_scaled * (1.0 / det)
+        inv = 1.0 / det
+        out[k], out[4 + k], out[8 + k] = t_scaled * inv, e1 * inv, e2 * inv
         mask |= 1 << k
-    return mask, out[0], out[1], out[2], out[3]
+    return (mask, out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8], out[9], out[10],
+            out[11])
 
 
 @overload(tri4_test, inline="always")
@@ -167,7 +169,7 @@ def _tri4_test_jit(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
 def _tri4_vector(typingctx, leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
     """`tri4_test` in LLVM vector IR."""
     f64 = types.float64
-    sig = types.Tuple((types.int64, f64, f64, f64, f64))(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
+    sig = types.Tuple((types.int64,) + (f64,) * 12)(leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
 
     def codegen(context, builder, signature, args):
         leaves_v, j_v, kx_v, ky_v, kz_v, sx_v, sy_v, sz_v, okx_v, oky_v, okz_v, tmax_v = args
@@ -208,9 +210,10 @@ def _tri4_vector(typingctx, leaves, j, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_
         reject = builder.or_(builder.and_(any_neg, any_pos), builder.fcmp_ordered("==", det, zero))
         reject = builder.or_(reject, builder.select(negative, reject_neg, reject_pos))
         hit = builder.xor(reject, ir.Constant(ir.VectorType(ir.IntType(1), 4), [1, 1, 1, 1]))
-        t = fmul(t_scaled, builder.fdiv(ir.Constant(_F64x4, [1.0] * 4), det))
+        inv = builder.fdiv(ir.Constant(_F64x4, [1.0] * 4), det)
         mask = builder.zext(builder.bitcast(hit, ir.IntType(4)), i64)
-        lanes = [builder.extract_element(t, ir.Constant(ir.IntType(32), k)) for k in range(4)]
+        lanes = [builder.extract_element(vec, ir.Constant(ir.IntType(32), k))
+                 for vec in (fmul(t_scaled, inv), fmul(e1, inv), fmul(e2, inv)) for k in range(4)]
         return context.make_tuple(builder, signature.return_type, [mask] + lanes)
 
     return sig, codegen

@@ -62,6 +62,12 @@ def _triangle_setup_if(geo, d):
 
 
 @njit_inline
+def _lane(x0, x1, x2, x3, k):
+    """x_k for a runtime lane number k (0-3)."""
+    return x0 if k == 0 else (x1 if k == 1 else (x2 if k == 2 else x3))
+
+
+@njit_inline
 def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     """Nearest intersection with t_min < t < t_max at shutter time `time`; `geo` is a `layout.Geometry`.
 
@@ -119,20 +125,18 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
                 first = np.int64(link[w, WIDE_CHILD + (q & 3)])
                 count = link[w, WIDE_COUNT + (q & 3)]
                 if count == LEAF_PACKED:
-                    mask, t0, t1, t2, t3 = tri4_test(geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz,
-                                                     best_t)
+                    mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = tri4_test(
+                        geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, best_t)
                     mask &= geo.leaf_link[first, LEAF_MASK]
                     lane, lane_t = -1, best_t
                     for k in range(4):
                         if mask & (1 << k):
-                            tk = t0 if k == 0 else (t1 if k == 1 else (t2 if k == 2 else t3))
-                            if tk > t_min and tk <= lane_t:
+                            tk = _lane(t0, t1, t2, t3, k)
+                            if tk > t_min and tk <= lane_t:  # ties: the later triangle, as the scalar loop
                                 lane, lane_t = k, tk
-                    if lane >= 0:  # the nearest lane again, scalar: the same t, and its barycentrics
-                        r = np.int64(geo.leaf_link[first, LEAF_BASE]) + lane
-                        t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, best_t)
-                        if t > t_min:
-                            best_t, best_ref, best_b1, best_b2, hit = t, r, b1, b2, True
+                    if lane >= 0:
+                        best_t, best_ref, hit = lane_t, np.int64(geo.leaf_link[first, LEAF_BASE]) + lane, True
+                        best_b1, best_b2 = _lane(u0, u1, u2, u3, lane), _lane(w0, w1, w2, w3, lane)
                     count = 0
                 for k in range(first, first + count):
                     r = geo.prim_ref[k]
@@ -262,12 +266,12 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
             first = np.int64(link[w, WIDE_CHILD + (q & 3)])
             count = link[w, WIDE_COUNT + (q & 3)]
             if count == LEAF_PACKED:
-                mask, t0, t1, t2, t3 = tri4_test(geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
+                mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = tri4_test(
+                    geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
                 mask &= geo.leaf_link[first, LEAF_MASK]
                 for k in range(4):
                     if mask & (1 << k):
-                        tk = t0 if k == 0 else (t1 if k == 1 else (t2 if k == 2 else t3))
-                        if tk <= t_min:
+                        if _lane(t0, t1, t2, t3, k) <= t_min:
                             continue
                         f0, f1, f2 = _triangle_factor(tri_info, materials, np.int64(geo.leaf_link[first, LEAF_BASE])
                                                       + k)
