@@ -302,7 +302,7 @@ def test_radiosity_takes_the_mean_of_the_textures_in_order():
 
 def test_opacity_rows_read_alpha_or_raw_luminance(tmp_path):
     """A texture on kd and opacity is two rows (colour, then coverage); the coverage is the alpha channel, or
-    the raw luminance of an image without one. No method cuts holes yet: compiling one warns."""
+    the raw luminance of an image without one; the material is marked MAT_CUTOUT (holes: tests/test_opacity.py)."""
     from lumos.kernels.texture import has_cutout, is_hole, material_alpha
 
     rgba = np.zeros((2, 2, 4), np.uint8)
@@ -312,9 +312,8 @@ def test_opacity_rows_read_alpha_or_raw_luminance(tmp_path):
     PILImage.fromarray(np.full((2, 2, 3), (255, 0, 0), np.uint8)).save(tmp_path / "l.png")
     for name, top, bottom in (("a.png", 0.2, 0.8), ("l.png", 0.2126, 0.2126)):
         tex = {"type": "image", "file": str(tmp_path / name), "apply_to": ["kd", "opacity"], "wrap": "clamp"}
-        with pytest.warns(lumos.LumosWarning, match="opacity"):
-            c = compile_dict(scene_of({"kd": 0.5, "texture": tex}))
-        assert c.arrays.materials[0, L.MAT_TEXTURE_COUNT] == 2
+        c = compile_dict(scene_of({"kd": 0.5, "texture": tex}))
+        assert c.arrays.materials[0, L.MAT_TEXTURE_COUNT] == 2 and c.arrays.materials[0, L.MAT_CUTOUT] == 1.0
         assert list(c.arrays.tex_info[:, T.TEX_APPLY]) == [T.APPLY_KD, T.APPLY_OPACITY]
         t, mat = textures_of(c.arrays), c.arrays.materials[0]
         assert has_cutout(t, mat)
@@ -325,3 +324,4 @@ def test_opacity_rows_read_alpha_or_raw_luminance(tmp_path):
         np.testing.assert_allclose(coeffs_at(c, 0.5, 0.1)[1], kd, rtol=0.05, atol=1e-6)  # kd: the colour
     plain = compile_dict(scene_of({"kd": 0.5}))
     assert not has_cutout(textures_of(plain.arrays), plain.arrays.materials[0])
+    assert plain.arrays.materials[0, L.MAT_CUTOUT] == 0.0

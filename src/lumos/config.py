@@ -19,3 +19,6 @@ DEFAULT_HEIGHT = 480
 #: A spot light whose cos(inner_angle) − cos(angle) is below this has a hard edge: full light inside the cone
 #: (cosθ >= cos angle), none outside, instead of the s² falloff between the two cones.
 SPOT_HARD_EDGE = 1e-9
+#: A ray passes through at most this many opacity cut-out holes (`kernels.cutout`); the next surface it meets
+#: counts as opaque, hole or not (a bound on the work, never reached by real models).
+MAX_HOLES = 64

@@ -102,7 +102,8 @@ def _load(scene):
 
 class RayCaster:
     """Ray queries against one scene, compiled once (BVH included). Lights are not geometry here: an area
-    light's emitting shape is not hit; only the scene's `objects` are."""
+    light's emitting shape is not hit; only the scene's `objects` are. Queries see geometry, not materials: the
+    holes of opacity cut-outs, which the renderers look through, are hit here."""
 
     def __init__(self, scene):
         from .compile import compile_scene

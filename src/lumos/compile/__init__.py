@@ -289,9 +289,10 @@ def _compile_raster(scene, settings) -> CompiledScene:
         solid = info[:, 2] < 0
         faces, info = faces[solid], info[solid]
         verts = mesh.positions[faces].reshape(-1, 9)
+        uvs = mesh.uvs[faces].reshape(-1, 6)  # where a shadow ray meets an opacity cut-out, its holes are looked up
         for mat, obj in {(int(a), int(b)) for a, b in info[:, :2]}:
             sel = (info[:, 0] == mat) & (info[:, 1] == obj)
-            tri_parts.append((verts[sel], None, None, mat, obj))
+            tri_parts.append((verts[sel], None, uvs[sel], mat, obj))
     compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names, mipmaps=settings.mipmap)
     compiled.raster = mesh
     return compiled

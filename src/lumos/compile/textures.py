@@ -38,23 +38,17 @@ def build_textures(materials, mipmaps: bool = False) -> tuple[np.ndarray, np.nda
     them; the ray methods look up level 0 only and skip building them).
 
     Writes the first tex_info row of each material's textures (or -1) and their count into its MAT_TEXTURE and
-    MAT_TEXTURE_COUNT columns and its bump map's row (or -1) into MAT_BUMP, in place in `materials.rows`, so
-    call it before `materials.array()`.
+    MAT_TEXTURE_COUNT columns, 1.0 into MAT_CUTOUT where one of them applies to opacity (0.0 elsewhere), and its
+    bump map's row (or -1) into MAT_BUMP, in place in `materials.rows`, so call it before `materials.array()`.
     """
     table = _Table(mipmaps)
-    if any(m is not None and any("opacity" in t.apply_to for t in m.textures) for m in materials.materials):
-        import warnings
-
-        from ..errors import LumosWarning
-
-        warnings.warn(LumosWarning("textures applied to opacity (cut-outs) are not rendered yet: those surfaces "
-                                   "stay opaque"), stacklevel=3)
     for row, material in zip(materials.rows, materials.materials):
-        row[L.MAT_TEXTURE], row[L.MAT_TEXTURE_COUNT] = -1.0, 0.0
+        row[L.MAT_TEXTURE], row[L.MAT_TEXTURE_COUNT], row[L.MAT_CUTOUT] = -1.0, 0.0, 0.0
         if material is None:  # an area light's emitter
             continue
         if material.textures:
             row[L.MAT_TEXTURE], row[L.MAT_TEXTURE_COUNT] = table.add_list(material.textures)
+            row[L.MAT_CUTOUT] = float(any("opacity" in t.apply_to for t in material.textures))
         row[L.MAT_BUMP] = -1.0 if material.bump is None else table.add_bump(material.bump)
     return table.arrays()
 

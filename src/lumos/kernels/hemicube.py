@@ -234,7 +234,7 @@ def _raster_face(face, res, near, nc, corners, item, scratch):
     ne = setup_edges(m, px, py, edges)
     r, nx = first_covered_row(ne, edges, r0, r1, res, _JX, _JY)
     if r < r1:
-        fill_polygon(ne, edges, nx, F, r, r1, res, _JX, _JY, item, zbuf, ids, gbuf)
+        fill_polygon(ne, edges, nx, F, r, r1, res, _JX, _JY, item, zbuf, ids, gbuf, None)
 
 
 @njit

@@ -10,7 +10,8 @@ Le·cosθ_y·A / (π·r²·N), so that its diffuse part is Kd·E/π with E the i
 (DESIGN.md §3). A sphere light is sampled uniformly in the cone it subtends (intensity Le·Ω/(π·N)).
 
 With `shadows` set, each light sample is tested with a shadow ray: opaque objects block it, transparent ones
-let their kt through (`shadow_transmittance`); raycast passes False.
+let their kt through, the holes of opacity cut-outs let everything through (`shadow_transmittance`); raycast
+passes False.
 """
 
 import math
@@ -36,6 +37,7 @@ from .layout import (
     LV_EDGE_V,
     LV_POSITION,
     LV_SPECULAR,
+    MAT_CUTOUT,
     MAT_KA,
     MAT_KD,
     MAT_KS,
@@ -54,6 +56,7 @@ from .layout import (
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d
 from .surface import offset_origin, surface_at
+from .texture import is_hole
 from .traverse import SHADOW_CUTOFF, closest_hit, transmittance
 from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
 
@@ -318,7 +321,7 @@ def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
     block; a transparent object multiplies by its kt each time the ray enters it if it is a solid, each time
     the ray crosses it if it is a surface (DESIGN.md §3: once per transparent object passed through)."""
     # one any-order traversal settles a shadow ray unless a csg object or an open cylinder or cone that lets
-    # light through is on it: nothing in the way, an opaque occluder, or transparent triangles, planes and
+    # light through, or a surface with an opacity cut-out, is on it: nothing in the way, an opaque occluder, or transparent triangles, planes and
     # convex solids, each counted once
     rgb, settled = transmittance(geo, surf.tri_info, lit.materials, origin, L, dist, stack, time)
     if settled:
@@ -330,8 +333,8 @@ def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
 @njit
 def walk_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
     """`shadow_transmittance` hit by hit, in order along the ray, one closest-hit traversal each: (rgb factor,
-    rays traced). It handles every kind of surface (a csg object may be entered several times) and is the
-    slow twin that `traverse.transmittance` is tested against."""
+    rays traced). It handles every kind of surface (a csg object may be entered several times) and the holes of
+    opacity cut-outs (`kernels.cutout`), and is the slow twin that `traverse.transmittance` is tested against."""
     tr, tg, tb = 1.0, 1.0, 1.0
     o = origin
     t_max = dist
@@ -343,10 +346,12 @@ def walk_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
         if t < 0.0:
             return (tr, tg, tb), rays
         p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, o, L, t, hit[1], hit[2], hit[3], hit[4], time)
+        mat = lit.materials[mat_id]
         if light >= 0:  # the emitting surface of an area light is not an occluder
             pass
+        elif mat[MAT_CUTOUT] != 0.0 and is_hole(lit, mat, u, v, p):  # a hole of an opacity cut-out: light passes
+            pass
         else:
-            mat = lit.materials[mat_id]
             kt0, kt1, kt2 = mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2]
             if kt0 <= 0.0 and kt1 <= 0.0 and kt2 <= 0.0:
                 return (0.0, 0.0, 0.0), rays

@@ -47,7 +47,8 @@ MAT_FRESNEL = 20  # 1.0: Schlick-weighted reflection and transmission (whitted)
 MAT_TEXTURE = 21  # first row in tex_info of the material's textures, or -1 (they follow one another)
 MAT_BUMP = 22  # row in tex_info of its bump map, or -1
 MAT_TEXTURE_COUNT = 23  # how many tex_info rows from MAT_TEXTURE are its textures (0 with none)
-MAT_SIZE = 24
+MAT_CUTOUT = 24  # 1.0: one of its textures applies to opacity, so its surfaces may have holes (kernels.cutout)
+MAT_SIZE = 25
 
 # Light kinds and columns. Kinds up to LIGHT_DIRECTIONAL are delta lights (one direction per shading point, no
 # random samples); the kinds above them are area lights.
@@ -157,9 +158,12 @@ Geometry = namedtuple(
 )
 #: What turns a hit into a surface (surface_at).
 Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_info", "shape_xform", "shape_info"])
-#: What the illumination model reads (illuminate, sample_light).
+#: What the illumination model reads (illuminate, sample_light); tex_info and tex_pixels for the opacity
+#: cut-outs that shadow rays pass through (`kernels.cutout`: a Lighting view serves as the `tex` of
+#: `texture.is_hole`).
 Lighting = namedtuple(
-    "Lighting", ["materials", "ambient", "light_kind", "light_samples", "light_vecs", "light_scalars"]
+    "Lighting", ["materials", "ambient", "light_kind", "light_samples", "light_vecs", "light_scalars", "tex_info",
+                 "tex_pixels"]
 )
 #: What the path tracer's light sampling reads besides `Lighting` (built by `compile.emitters`).
 Emitters = namedtuple(

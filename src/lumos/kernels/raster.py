@@ -31,7 +31,8 @@ import math
 import numpy as np
 
 from .jit import njit, njit_alloc, njit_inline, njit_parallel, prange
-from .layout import CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
+from .layout import CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV, MAT_CUTOUT
+from .texture import is_hole
 
 #: Rows per band: the unit of parallel work in the raster pass.
 BAND = 8
@@ -228,17 +229,25 @@ def fill_bins(row_lo, row_hi, n_bands):
 
 @njit_parallel
 def raster_bands(bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
-                 width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count):
+                 width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count, tex, materials, prim_material,
+                 uv_at):
     """The raster pass: each band of BAND rows scan-converts its polygons into the buffers. In MODE_DEPTH
-    it clears zbuf (−inf) and ids (−1) first; gbuf is written only where ids >= 0."""
+    it clears zbuf (−inf) and ids (−1) first; gbuf is written only where ids >= 0.
+
+    Opacity cut-outs: a polygon whose material (materials[prim_material[prim]], float64 (nm, MAT_SIZE); int32
+    (n_prims,)) has MAT_CUTOUT set writes no sample where its α (`texture.is_hole`, `tex` a view with tex_info and
+    tex_pixels) at the interpolated (u, v) of attrs columns uv_at, uv_at + 1 is a hole, so what lies behind it
+    stays in the buffers. uv_at −1: no cut-outs (the materials are not read)."""
     for band in prange(bins.shape[0] - 1):
         raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
-                    width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count)
+                    width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count, tex, materials,
+                    prim_material, uv_at)
 
 
 @njit_alloc
 def raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
-                width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count):
+                width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count, tex, materials, prim_material,
+                uv_at):
     """Scan-convert every polygon binned to one band of rows, in order (the same result on any thread)."""
     K = attrs.shape[1]
     KF = K + 2
@@ -293,7 +302,20 @@ def raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, at
                 F[i, 1] = q
                 for a in range(K):
                     F[i, 2 + a] = attrs[v, a] * q
-        fill_polygon(ne, edges, nx, F, r, r1, width, jx, jy, prim, zbuf, ids, gbuf)
+        if uv_at >= 0 and materials[prim_material[prim], MAT_CUTOUT] != 0.0:
+            fill_polygon(ne, edges, nx, F, r, r1, width, jx, jy, prim, zbuf, ids, gbuf,
+                         (tex, materials[prim_material[prim]], uv_at))
+        else:
+            fill_polygon(ne, edges, nx, F, r, r1, width, jx, jy, prim, zbuf, ids, gbuf, None)
+
+
+@njit_inline
+def _in_hole(cutout, xF):
+    """Whether the sample whose (key, q, A·q) xF[0] holds falls in a hole of the polygon's opacity cut-out."""
+    tex, mat, uv_at = cutout
+    inv_q = 1.0 / xF[0, 1]
+    p = (xF[0, 2] * inv_q, xF[0, 3] * inv_q, xF[0, 4] * inv_q)
+    return is_hole(tex, mat, xF[0, 2 + uv_at] * inv_q, xF[0, 3 + uv_at] * inv_q, p)
 
 
 # ------------------------------------------------------------------ the scan conversion of one polygon
@@ -398,9 +420,12 @@ def count_polygon(ne, edges, r0, r1, width, jx, jy, count):
 
 
 @njit_inline
-def fill_polygon(ne, edges, nx0, F, r0, r1, width, jx, jy, item, zbuf, ids, gbuf):
+def fill_polygon(ne, edges, nx0, F, r0, r1, width, jx, jy, item, zbuf, ids, gbuf, cutout):
     """The z-buffer pass of one polygon over rows [r0, r1): where its depth key is larger (nearer) than
     zbuf[r, c], zbuf[r, c] = key, ids[r, c] = item and gbuf[r, c, a] = (A·q)/q for the F.shape[1] - 2 attributes.
+    `cutout` None, or (tex, material row, uv_at) for a polygon with an opacity cut-out: samples where the
+    attributes uv_at, uv_at + 1 (its (u, v), perspective-correct as the others) fall in a hole
+    (`texture.is_hole`, at the position in attributes 0-2) are discarded, z-buffer and all.
     The crossings of row r0 must be in `edges` already, nx0 of them, as `first_covered_row` leaves them.
 
     F float64 (>= n, KF): (key, q, A·q) at the polygon's vertices, all linear in screen space; each is stepped
@@ -449,10 +474,14 @@ def fill_polygon(ne, edges, nx0, F, r0, r1, width, jx, jy, item, zbuf, ids, gbuf
             for c in range(c0, c1):
                 key = xF[0, 0]
                 if key > zbuf[r, c]:
-                    zbuf[r, c] = key
-                    ids[r, c] = item
-                    inv_q = 1.0 / xF[0, 1]
-                    for a in range(K):
-                        gbuf[r, c, a] = xF[0, 2 + a] * inv_q
+                    covered = True
+                    if cutout is not None:  # (pruned at compile time for the polygons without one)
+                        covered = not _in_hole(cutout, xF)
+                    if covered:
+                        zbuf[r, c] = key
+                        ids[r, c] = item
+                        inv_q = 1.0 / xF[0, 1]
+                        for a in range(K):
+                            gbuf[r, c, a] = xF[0, 2 + a] * inv_q
                 for a in range(KF):
                     xF[0, a] += xF[1, a]

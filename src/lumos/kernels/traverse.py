@@ -23,6 +23,7 @@ from .layout import (
     LEAF_BASE,
     LEAF_MASK,
     LEAF_PACKED,
+    MAT_CUTOUT,
     MAT_KT,
     SHAPE_BOX,
     SHAPE_CONE,
@@ -178,8 +179,10 @@ def transmittance(geo, tri_info, materials, o, d, t_max, stack, time):
     The product of what each primitive lets through (`_shape_factor`; a triangle: its kt if it is crossed, 0 if
     it is opaque), in any order, so one any-order traversal settles it, and it stops at the first opaque
     primitive. settled is False when a primitive only the hit-by-hit walk can count is on the ray (see
-    `illumination.shadow_transmittance`). `tri_info` and `materials` are the triangles' and materials' arrays."""
-    return _pass_through(geo, tri_info, materials, o, d, 0.0, t_max, stack, time)
+    `illumination.shadow_transmittance`), among them an opacity cut-out (`kernels.cutout`: its triangles' factor
+    is NaN, which no later factor undoes). `tri_info` and `materials` are the triangles' and materials' arrays."""
+    rgb, settled = _pass_through(geo, tri_info, materials, o, d, 0.0, t_max, stack, time)
+    return rgb, settled and rgb[0] == rgb[0]
 
 
 @njit_inline
@@ -189,7 +192,8 @@ def _shape_factor(geo, materials, s, o, d, t_min, t_max, time):
     where the ray enters it (its span along the whole line starts inside the segment), a transparent planar one
     (plane, disk, rect) its kt where the ray crosses it; an emitter lets everything through. settled is False
     for a transparent shape of another kind on the ray (csg, open cylinder or cone): only the hit-by-hit walk
-    knows how often the ray crosses it. With `materials` None every shape is opaque (`any_hit`)."""
+    knows how often the ray crosses it, or a shape with an opacity cut-out (MAT_CUTOUT) on the ray: only the
+    walk looks its holes up. With `materials` None every shape is opaque (`any_hit`)."""
     if materials is None:
         t, part, b1, b2 = _shape_hit(geo, s, o, d, t_min, t_max, time)
         return (1.0, 1.0, 1.0, True) if t == NO_HIT else (0.0, 0.0, 0.0, True)
@@ -197,6 +201,9 @@ def _shape_factor(geo, materials, s, o, d, t_min, t_max, time):
     if info[INFO_LIGHT] >= 0:
         return 1.0, 1.0, 1.0, True
     mat = np.int64(info[INFO_MATERIAL])
+    if materials[mat, MAT_CUTOUT] != 0.0:  # an opacity cut-out on the ray: only the walk can look its holes up
+        t, part, b1, b2 = _shape_hit(geo, s, o, d, t_min, t_max, time)
+        return 1.0, 1.0, 1.0, t == NO_HIT
     kt0, kt1, kt2 = materials[mat, MAT_KT], materials[mat, MAT_KT + 1], materials[mat, MAT_KT + 2]
     kind = info[INFO_KIND]
     convex = kind == SHAPE_SPHERE or kind == SHAPE_BOX or (
@@ -219,12 +226,16 @@ def _shape_factor(geo, materials, s, o, d, t_min, t_max, time):
 
 @njit_inline
 def _triangle_factor(tri_info, materials, r):
-    """What triangle r lets through where a ray crosses it (see `_shape_factor`)."""
+    """What triangle r lets through where a ray crosses it (see `_shape_factor`); NaN for a triangle with an
+    opacity cut-out (MAT_CUTOUT), whose holes only the hit-by-hit walk can look up: the product stays NaN
+    whatever else the ray crosses, and `transmittance` reports the ray unsettled."""
     if materials is None:
         return 0.0, 0.0, 0.0
     if tri_info[r, INFO_LIGHT] >= 0:
         return 1.0, 1.0, 1.0
     mat = np.int64(tri_info[r, INFO_MATERIAL])
+    if materials[mat, MAT_CUTOUT] != 0.0:
+        return np.nan, np.nan, np.nan
     return materials[mat, MAT_KT], materials[mat, MAT_KT + 1], materials[mat, MAT_KT + 2]
 
 

@@ -17,7 +17,8 @@ def surfaces_of(sa):
 
 @njit
 def lighting_of(sa):
-    return Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars)
+    return Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars,
+                    sa.tex_info, sa.tex_pixels)
 
 
 @njit
@@ -34,5 +35,6 @@ def owned_views(sa):
     return (Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info,
                      sa.unbounded, sa.csg_nodes, sa.wide_nodes, sa.wide_link, sa.leaf_tris, sa.leaf_link),
             Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info),
-            Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars),
+            Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars,
+                    sa.tex_info, sa.tex_pixels),
             Textures(sa.tex_info, sa.tex_pixels, sa.tri_tangents))

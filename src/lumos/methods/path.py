@@ -44,6 +44,7 @@ from ..kernels.bsdf import (
     sample_smooth,
 )
 from ..kernels.camera import camera_ray_at
+from ..kernels.cutout import closest_visible_hit, occluded
 from ..kernels.emitters import emitter_pdf, sample_emitter
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
@@ -53,7 +54,6 @@ from ..kernels.sobol import sobol_2d
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
-from ..kernels.traverse import any_hit, closest_hit
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .common import Film, check_memory, row_bands, set_threads
 
@@ -180,7 +180,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
     depth = 0
     while True:
         # stage 1: the nearest surface along the ray
-        hit = closest_hit(geo, o, d, 0.0, config.T_FAR, stack, stack_t, time)
+        hit = closest_visible_hit(geo, surf, lit, o, d, 0.0, config.T_FAR, stack, stack_t, time)
         rays += 1
         t = hit[0]
         if t < 0.0:
@@ -251,7 +251,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
                     if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
                         origin, ws, t_light = _shadow_ray(p, n_geo, wi, dist)
                         rays += 1
-                        if not any_hit(geo, origin, ws, 0.0, t_light, stack, time):
+                        if not occluded(geo, surf, lit, origin, ws, t_light, stack, stack_t, time):
                             w = 1.0 if (delta or mode == MODE_LIGHT) else power_heuristic(pdf_light, pdf_bsdf)
                             w /= pdf_light
                             L0 += b0 * c0 * w

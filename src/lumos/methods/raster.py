@@ -14,7 +14,9 @@ viewer sees (Gouraud keeps an intensity for each side of every vertex). With `sp
 rendered `spp` times with the sample point moved within the pixel (stratified, the same offset for every pixel,
 as an accumulation buffer does) and averaged. `shadows: true` adds shadow rays against a BVH of the same
 polygons; `cull_backfaces: true` skips polygons facing away; `perspective_correct: false` interpolates in
-screen space, the textbook's way, to show its distortion.
+screen space, the textbook's way, to show its distortion. A polygon with an opacity cut-out writes neither
+z-buffer nor G-buffer where its (u, v) falls in a hole (`kernels.raster.fill_polygon`), so what lies behind it is
+drawn there.
 """
 
 from __future__ import annotations
@@ -27,12 +29,12 @@ from ..compile.camera import camera_arrays
 from ..kernels import raster as R
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_inline, njit_parallel, prange
-from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, LIGHT_SPHERE, MAT_BUMP, MAT_EMISSION, MAT_KA,
-                              MAT_KD, MAT_KS, MAT_SHININESS, MAT_TEXTURE)
+from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, LIGHT_SPHERE, MAT_BUMP, MAT_CUTOUT, MAT_EMISSION,
+                              MAT_KA, MAT_KD, MAT_KS, MAT_SHININESS, MAT_SIZE, MAT_TEXTURE, Textures)
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
 from ..kernels.surface import shading_side
-from ..kernels.texture import bump_normal, material_coeffs_filtered
+from ..kernels.texture import TEX_SIZE, bump_normal, material_coeffs_filtered
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, set_threads, term_aovs
 
@@ -133,6 +135,8 @@ def _footprint(cam_vecs, ortho, pixel_size, p, fn, frame):
 
 
 _NO_FOOTPRINT = (0.0, 0.0, 0.0, 0.0)
+#: The texture view of a pass without opacity cut-outs (never read: the same types as a scene's, one compilation).
+_NO_TEXTURES = Textures(np.zeros((0, TEX_SIZE)), np.zeros((0, 3), np.float32), np.zeros((0, 12), np.float32))
 _NO_PIXEL = np.array([-1, -1], np.int64)
 
 
@@ -300,8 +304,16 @@ class Rasterizer:
     Kept separate from shading so tests and tools can use the z-buffer and coverage directly.
     """
 
-    def __init__(self, mesh, attrs, camera, width, height, cull=False, persp=True):
+    def __init__(self, mesh, attrs, camera, width, height, cull=False, persp=True, cutouts=None):
+        """`cutouts`: None, or (scene arrays, uv_at) to discard the samples of polygons whose material has an
+        opacity cut-out where their (u, v), attributes uv_at and uv_at + 1, fall in a hole."""
         self.mesh = mesh
+        if cutouts is None:
+            self.cutouts = (_NO_TEXTURES, np.zeros((1, MAT_SIZE)), np.zeros(1, np.int32), np.int64(-1))
+        else:
+            sa, uv_at = cutouts
+            self.cutouts = (Textures(sa.tex_info, sa.tex_pixels, sa.tri_tangents), sa.materials,
+                            np.ascontiguousarray(mesh.prim_info[:, 0], np.int32), np.int64(uv_at))
         self.width, self.height = width, height
         self.cam_vecs, self.cam_params = camera_arrays(camera)
         self.ortho = bool(camera.type == "orthographic")
@@ -345,7 +357,7 @@ class Rasterizer:
         row_lo, row_hi, bins, prims = self._bin(jy)
         R.raster_bands(bins, prims, self.mesh.prim_start, self.mesh.prim_index, self.clip, self.screen,
                        self.attrs, self.near, self.ortho, self.persp, np.int64(self.width), np.int64(self.height),
-                       float(jx), float(jy), row_lo, row_hi, np.int64(mode), zbuf, ids, gbuf, count)
+                       float(jx), float(jy), row_lo, row_hi, np.int64(mode), zbuf, ids, gbuf, count, *self.cutouts)
 
 
 class RasterFrame:
@@ -397,8 +409,9 @@ class RasterFrame:
                           self.shadows, False, self.prim_terms, counts)
             self.rays += int(counts.sum())
         self.attrs = attrs
+        cutouts = textured and bool((sa.materials[:, MAT_CUTOUT] != 0.0).any())
         self.raster = Rasterizer(mesh, attrs, camera, width, height, settings.cull_backfaces,
-                                 settings.perspective_correct)
+                                 settings.perspective_correct, (sa, self.uv_at) if cutouts else None)
         self.offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
 
     def shade_pass(self, s, weight, radiance, aov_buffers, terms, want_terms, rays_per_row, explain=_NO_PIXEL,

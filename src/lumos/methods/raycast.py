@@ -1,6 +1,7 @@
 """Ray casting: one ray per pixel (or `spp` stratified jittered rays, box filter), nearest hit, local illumination.
 
-Each camera ray finds its nearest hit through the BVH; the surface there is shaded by the classic model
+Each camera ray finds its nearest hit through the BVH (past the holes of opacity cut-outs, `kernels.cutout`); the
+surface there is shaded by the classic model
 (`kernels.illumination.illuminate`) with no shadow rays: a surface that faces a light is lit by it (the
 textbook's simplifying assumption of ray casting). A ray that reaches an area light sees its radiance; a ray
 that hits nothing returns the background.
@@ -13,11 +14,11 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray
+from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_parallel, prange
 from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
-from ..kernels.traverse import closest_hit
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
@@ -71,7 +72,7 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
             for s in range(spp):
                 # stage 1: camera ray; stage 2: nearest hit; stage 3: local illumination
                 o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
-                hit = closest_hit(geo, o, d, 0.0, config.T_FAR, stack, stack_t, 0.0)
+                hit = closest_visible_hit(geo, surf, lit, o, d, 0.0, config.T_FAR, stack, stack_t, 0.0)
                 rays += 1
                 if hit[0] < 0.0:
                     r += sa.background[0]

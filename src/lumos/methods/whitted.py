@@ -30,6 +30,7 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray, camera_ray_at
+from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from ..kernels.layout import (
@@ -43,7 +44,6 @@ from ..kernels.layout import (
 from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
 from ..kernels.surface import offset_origin, shading_side, surface_at
-from ..kernels.traverse import closest_hit
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
 from ..kernels.views import geometry_of, lighting_of, owned_views, surfaces_of, textures_of
 from ..errors import LumosError
@@ -186,7 +186,7 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
             log[row, LOG_TIME] = time
         # where this ray's light counts: the primary hit's own terms, or the reflected / transmitted term
         k_light = T_REFLECTED if branch == RAY_REFLECTED else T_TRANSMITTED
-        hit = closest_hit(geo, ro, rd, 0.0, config.T_FAR, stack, stack_t, time)
+        hit = closest_visible_hit(geo, surf, lit, ro, rd, 0.0, config.T_FAR, stack, stack_t, time)
         rays += 1
         t = hit[0]
         if t < 0.0:

@@ -289,6 +289,9 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
                 name = next((repr(k) for k, m in scene.materials.items() if m is mat), "an inline material")
                 warnings.warn(f"radiosity does not look textures up per point: material {name} takes part with "
                               "its texture's mean colour", LumosWarning, stacklevel=3)
+                if any("opacity" in t.apply_to for t in mat.textures):
+                    warnings.warn(f"radiosity ignores opacity maps: the surfaces of material {name} stay whole "
+                                  "(no cut-out holes)", LumosWarning, stacklevel=3)
         total = kd + ks + kr + np.asarray(mat.kt)
         if total.max() > 1.0:
             kd = kd / total.max()
