@@ -16,6 +16,15 @@ from lumos.compile import compile_scene
 from lumos.kernels import layout as L
 
 
+def run_cli(capsys, *argv):
+    """(exit code, stdout, stderr) of `lumos ARGV...` run in-process."""
+    from lumos import cli
+
+    code = cli.main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
 def compile_dict(scene: dict):
     """`CompiledScene` of a scene dict (load + validate + flatten + BVH)."""
     return compile_scene(lumos.load_scene(scene))

@@ -9,6 +9,7 @@ import textwrap
 import numpy as np
 import pytest
 
+from conftest import run_cli as run
 from lumos import cli
 from lumos.errors import LumosError
 
@@ -38,12 +39,6 @@ def bad(tmp_path):
             radius: -1
         """))
     return path
-
-
-def run(capsys, *argv):
-    code = cli.main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def one_error_line(err: str) -> str:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import lumos
-from lumos import cli
+from conftest import run_cli as run
 from lumos.errors import LumosError
 from lumos.io.models import ImportedModel
 from lumos.scene import from_model
@@ -74,12 +74,6 @@ def write(folder: Path, text: str, name: str = "scene.yaml") -> Path:
     path = folder / name
     path.write_text(textwrap.dedent(text))
     return path
-
-
-def run(capsys, *argv):
-    code = cli.main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def one_error_line(err: str) -> str:

@@ -63,6 +63,22 @@ def _triangle_setup_if(geo, d):
 
 
 @njit_inline
+def _leaf_of(link, node):
+    """(first, count) of the leaf child that stack entry node = ~(4·wide node + slot) names: a prim_ref range, or
+    (its packed row, LEAF_PACKED)."""
+    q = ~node
+    return np.int64(link[q >> 2, WIDE_CHILD + (q & 3)]), link[q >> 2, WIDE_COUNT + (q & 3)]
+
+
+@njit_inline
+def _packed_leaf(geo, row, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
+    """`simd.tri4_test` of packed leaf `row`, its mask limited to the lanes that hold triangles."""
+    mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = tri4_test(geo.leaf_tris, row, kx, ky, kz, sx, sy, sz,
+                                                                       okx, oky, okz, t_max)
+    return mask & geo.leaf_link[row, LEAF_MASK], t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3
+
+
+@njit_inline
 def _lane(x0, x1, x2, x3, k):
     """x_k for a runtime lane number k (0-3)."""
     return x0 if k == 0 else (x1 if k == 1 else (x2 if k == 2 else x3))
@@ -121,14 +137,10 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
                     continue
             else:
                 # leaf: test its primitives, four triangles at once where it has a packed row
-                q = ~node
-                w = q >> 2
-                first = np.int64(link[w, WIDE_CHILD + (q & 3)])
-                count = link[w, WIDE_COUNT + (q & 3)]
+                first, count = _leaf_of(link, node)
                 if count == LEAF_PACKED:
-                    mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = tri4_test(
-                        geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, best_t)
-                    mask &= geo.leaf_link[first, LEAF_MASK]
+                    mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = _packed_leaf(
+                        geo, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, best_t)
                     lane, lane_t = -1, best_t
                     for k in range(4):
                         if mask & (1 << k):
@@ -272,14 +284,10 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
                         else ~(4 * node + k)
                     sp += 1
         else:
-            q = ~node
-            w = q >> 2
-            first = np.int64(link[w, WIDE_CHILD + (q & 3)])
-            count = link[w, WIDE_COUNT + (q & 3)]
+            first, count = _leaf_of(link, node)
             if count == LEAF_PACKED:
-                mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = tri4_test(
-                    geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
-                mask &= geo.leaf_link[first, LEAF_MASK]
+                mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = _packed_leaf(
+                    geo, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
                 for k in range(4):
                     if mask & (1 << k):
                         if _lane(t0, t1, t2, t3, k) <= t_min:
