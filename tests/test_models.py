@@ -495,3 +495,19 @@ def test_importer_warnings_are_lumos_warnings(fake_importer, tmp_path, capsys):
         lumos.load_scene(write(tmp_path, "objects: [{type: model, file: sloppy.obj}]\n"))
     code, out, err = run(capsys, "info", tmp_path / "sloppy.obj")
     assert code == 0 and "lumos: warning: " in err and "missing.mtl" in err
+
+
+def test_a_scene_built_in_python_is_completed_like_a_loaded_one(tmp_path):
+    """`Scene.model_validate` does not read files; `lumos.render` and `RayCaster` complete such a scene as
+    `load_scene` would: its includes are expanded and its mesh files read (here the same bunny both ways)."""
+    from lumos.scene.model import Scene
+
+    built = Scene.model_validate({"objects": [{"type": "model", "file": str(BUNNY)},
+                                              {"type": "mesh", "file": str(BUNNY),
+                                               "transform": {"translate": [0.3, 0, 0]}}]})
+    image = lumos.render(built, method="raycast", width=32, height=24)
+    assert np.isfinite(image.array).all()
+    assert [o.type for o in built.objects] == ["mesh", "mesh"]
+    assert len(built.objects[0].faces) == len(built.objects[1].faces) > 900
+    hits = lumos.RayCaster(built).closest([[0.3 - 0.02, 0.1, 1.0]], [[0, 0, -1]])
+    assert hits.t[0] < np.inf

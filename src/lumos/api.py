@@ -132,8 +132,7 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
     from .scene.loader import load_scene
 
     t0 = time.perf_counter()
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene)
+    scene = load_scene(scene)  # a Scene built in Python is completed (mesh files, includes), a file or dict loaded
     t_load = time.perf_counter()
     cfg = resolve_settings(scene, settings)
     if cfg.denoise:

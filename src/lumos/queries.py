@@ -85,7 +85,7 @@ def _load(scene):
     from .scene import Scene, load_scene
 
     if isinstance(scene, Scene):
-        return scene
+        return load_scene(scene)  # completes a Scene built in Python (mesh files, includes)
     if isinstance(scene, (str, os.PathLike)):
         path = Path(scene)
         ext = path.suffix.lower()

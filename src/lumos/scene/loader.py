@@ -50,7 +50,7 @@ def load_scene(source: str | os.PathLike | dict) -> Scene:
     Raises `SceneError` (a `LumosError`) with a one-line message for any bad input.
     """
     if isinstance(source, Scene):
-        return source
+        return _completed(source)
     if isinstance(source, (dict, list)):
         name, path, lines, data = "scene", None, None, source
     elif isinstance(source, (str, os.PathLike)):
@@ -76,6 +76,22 @@ def load_scene(source: str | os.PathLike | dict) -> Scene:
     scene._included = included
     if path is not None:
         scene._source = path
+    return scene
+
+
+def _completed(scene: Scene) -> Scene:
+    """A Scene built in Python (`Scene.model_validate`) gets what `load_scene` gives a file or a dict: mesh files
+    read, image paths resolved, `type: model` includes expanded (paths relative to the scene's file, else to
+    the current folder). A scene `load_scene` made is returned as it is."""
+    folder = scene.source.parent if scene.source is not None else Path.cwd()
+    for i, top in enumerate(scene.objects):
+        for obj, at in _solids(top, ("objects", i)):
+            if isinstance(obj, Mesh) and obj.file is not None and obj.vertices is None:
+                _load_mesh_file(obj, folder, f"scene: {format_path(at + ('file',))}")
+    _resolve_texture_files(scene, folder, "scene", None)
+    included = list(scene._included or [])
+    _expand_models(scene, folder, "scene", None, included)
+    scene._included = included
     return scene
 
 
