@@ -234,8 +234,9 @@ def check_wide_tree(arrays, prim_boxes):
     assert (seen_slots == 1).all()  # the leaves partition prim_ref
 
 
-def check_packed_leaves(arrays):
-    """Each packed leaf row holds exactly its triangles' vertices, lane by lane, and its slot no longer points
+def check_packed_leaves(arrays, faces=None):
+    """Each packed leaf row holds exactly its triangles' vertices, lane by lane, with their object ids, face
+    indices (`faces`, the compiled scene's triangle_faces, when given) and uv flags, and its slot no longer points
     into prim_ref; every triangle of the BVH is in one packed row or one plain leaf."""
     link, leaves, leaf_link = np.asarray(arrays.wide_link), np.asarray(arrays.leaf_tris), np.asarray(arrays.leaf_link)
     count = link[:, L.WIDE_COUNT:L.WIDE_COUNT + 4]
@@ -247,6 +248,11 @@ def check_packed_leaves(arrays):
         assert mask in (1, 3, 7, 15)
         for lane in range(int(mask).bit_length()):
             np.testing.assert_array_equal(leaves[row, lane:36:4], arrays.tri_verts[base + lane])
+            assert leaf_link[row, L.LEAF_OBJECT + lane] == arrays.tri_info[base + lane, L.INFO_OBJECT]
+            if faces is not None:
+                assert leaf_link[row, L.LEAF_FACE + lane] == faces[base + lane]
+            has_uvs = bool(arrays.tri_info[base + lane, L.INFO_FLAGS] & L.FLAG_UVS)
+            assert bool(leaf_link[row, L.LEAF_UVS] & (1 << lane)) == has_uvs
             covered.append(base + lane)
     plain = [(f, c) for f, c in zip(link[:, L.WIDE_CHILD:L.WIDE_CHILD + 4][count > 0], count[count > 0])]
     refs = arrays.prim_ref
@@ -260,7 +266,7 @@ def test_tree_invariants_mixed_scene(mixed):
     depth = check_tree(compiled, _prim_boxes(scene, compiled.arrays))
     assert depth >= 5  # a real tree, not one leaf
     check_wide_tree(compiled.arrays, _prim_boxes(scene, compiled.arrays))
-    check_packed_leaves(compiled.arrays)
+    check_packed_leaves(compiled.arrays, compiled.triangle_faces)
     assert len(compiled.arrays.wide_nodes) < len(compiled.arrays.node_box) / 2.5  # ~3 binary levels per node
 
 

@@ -257,6 +257,41 @@ def test_mesh_faces_and_uvs():
     assert np.allclose(h.uv[1], [0.3, 0.2])  # no uvs: the barycentrics of v1 and v2
 
 
+def test_hit_records_of_many_meshes_name_the_face_that_was_hit(rng):
+    """Hits on meshes report their record from the packed leaf row the hit test read: the object, the face of
+    its own mesh, that face's normal and its uvs at the hit point, checked against the meshes themselves."""
+    import trimesh
+
+    meshes = []
+    for k, sub in enumerate([3, 2, 3]):
+        m = trimesh.creation.icosphere(subdivisions=sub, radius=1.0 + 0.2 * k)
+        v = m.vertices + [3.0 * k - 3.0, 0.3 * k, 0.0]
+        uv = np.c_[0.5 + 0.5 * m.vertices[:, 0], 0.5 + 0.5 * m.vertices[:, 1]] if k != 1 else None
+        meshes.append((v, m.faces, uv))
+    objects = [{"type": "mesh", "vertices": v, "faces": f, **({"uvs": uv} if uv is not None else {})}
+               for v, f, uv in meshes]
+    rc = lumos.RayCaster({"objects": objects})
+    n = 4000
+    o = rng.uniform([-6, -3, 4], [6, 3, 6], (n, 3))
+    d = naive.unit(rng.uniform([-5, -1.5, -1], [5, 1.5, 1], (n, 3)) - o)
+    h = rc.closest(o, d)
+    hit = np.flatnonzero(h.object_id >= 0)
+    assert len(hit) > n // 3 and set(h.object_id[hit]) == {0, 1, 2}
+    for i in hit:
+        v, f, uv = meshes[h.object_id[i]]
+        corners = v[f[h.prim_id[i]]].astype(np.float32).astype(np.float64)  # the scene stores float32 corners
+        e1, e2 = corners[1] - corners[0], corners[2] - corners[0]
+        normal = naive.unit(np.cross(e1, e2))
+        assert np.allclose(h.normal[i], normal, atol=1e-9)
+        p = h.point[i]
+        assert abs(np.dot(p - corners[0], normal)) < 1e-6  # on that face's plane
+        # barycentrics of the hit point in that face: inside it, and the uvs interpolated there
+        b = np.linalg.lstsq(np.c_[e1, e2], p - corners[0], rcond=None)[0]
+        assert b.min() > -1e-6 and b.sum() < 1 + 1e-6
+        want = (uv[f[h.prim_id[i]]].T @ [1 - b.sum(), b[0], b[1]]) if uv is not None else b
+        assert np.allclose(h.uv[i], want, atol=1e-5)
+
+
 # ------------------------------------------------------------------------------------------- Embree
 
 

@@ -118,7 +118,8 @@ class RayCaster:
         self._arrays = sa._replace(shape_info=info)
         self.names = [o.name or f"{o.type}#{i}" for i, o in enumerate(self.scene.objects)]
         n_obj = len(self.scene.objects)
-        self._tri_prim = self._triangle_faces(sa)
+        faces = self._compiled.triangle_faces  # each BVH-ordered triangle's face in its mesh; csg mesh solids: -1
+        self._tri_prim = np.concatenate([faces, np.full(len(sa.tri_verts) - len(faces), -1, np.int32)])
         self._object_bounds = _object_bounds(sa, n_obj)
         self._closed = None  # (solid (n_obj,) bool, closed mesh (n_obj,) int8, open edges (n_obj,)): on first use
         b = self._compiled.bounds
@@ -151,18 +152,6 @@ class RayCaster:
     @property
     def _open_edges(self) -> np.ndarray:
         return self._closedness()[2]
-
-    def _triangle_faces(self, sa) -> np.ndarray:
-        """int32 (nt,): each BVH-ordered triangle's face index in its own mesh (-1 for csg mesh solids)."""
-        order = self._compiled.triangle_order
-        nt, nb = len(sa.tri_verts), len(order)
-        faces = np.full(nt, -1, np.int32)
-        if nb:
-            obj_of_concat = np.empty(nb, np.int64)
-            obj_of_concat[order] = sa.tri_info[:nb, 2]
-            first = np.searchsorted(obj_of_concat, np.arange(obj_of_concat.max() + 1))  # objects come in order
-            faces[:nb] = order - first[sa.tri_info[:nb, 2]]
-        return faces
 
     # --------------------------------------------------------------------------------------- addressing
 

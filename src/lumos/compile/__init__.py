@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import LumosError
 from ..kernels import layout as L
 from .bvh import build, pack_nodes, packed_leaves, wide_nodes
+from .memory import aligned_zeros
 from .meshprep import prepare_mesh
 from .raster import RasterMesh, build_raster_mesh
 from .shapes import canonical, frame, rect_canonical, world_bounds
@@ -39,6 +40,8 @@ class CompiledScene:
     #: int64 (nt,): for each BVH-ordered triangle, its index in the objects' triangles taken in scene order (each
     #: mesh's prepared faces, one object after another): ray queries report a hit's face of its own mesh
     triangle_order: Optional[np.ndarray] = None
+    #: int32 (nt,): each BVH-ordered triangle's face index in its own mesh (what a ray query reports as prim_id)
+    triangle_faces: Optional[np.ndarray] = None
 
 
 class _Materials:
@@ -338,13 +341,17 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
         shape_mats = material_rows[shape_info[:, L.INFO_MATERIAL]]
         reads_uv = (shape_mats[:, L.MAT_TEXTURE] >= 0) | (shape_mats[:, L.MAT_BUMP] >= 0)
         shape_info[reads_uv, L.INFO_FLAGS] |= L.FLAG_READS_UV
-    all_tri_verts = np.ascontiguousarray(np.concatenate([tri_verts[tri_order], solid_tris[0]]))
-    leaf_tris, leaf_link = packed_leaves(wide_link, prim_ref, all_tri_verts)
+    all_tri_verts = _leaf_ordered(tri_verts, tri_order, solid_tris[0])
+    all_tri_info = _leaf_ordered(tri_info, tri_order, solid_tris[3])
+    tri_face = _triangle_faces(tri_order, all_tri_info[:len(tri_order), L.INFO_OBJECT])
+    leaf_tris, leaf_link = packed_leaves(wide_link, prim_ref, all_tri_verts, all_tri_info[:, L.INFO_OBJECT],
+                                         np.concatenate([tri_face, np.full(len(solid_tris[0]), -1, np.int32)]),
+                                         all_tri_info[:, L.INFO_FLAGS] & L.FLAG_UVS != 0)
     arrays = L.SceneArrays(
         tri_verts=all_tri_verts,
-        tri_normals=np.ascontiguousarray(np.concatenate([tri_normals[tri_order], solid_tris[1]])),
-        tri_uvs=np.ascontiguousarray(np.concatenate([tri_uvs[tri_order], solid_tris[2]])),
-        tri_info=np.ascontiguousarray(np.concatenate([tri_info[tri_order], solid_tris[3]])),
+        tri_normals=_leaf_ordered(tri_normals, tri_order, solid_tris[1]),
+        tri_uvs=_leaf_ordered(tri_uvs, tri_order, solid_tris[2]),
+        tri_info=all_tri_info,
         shape_xform=shape_xform,
         shape_info=shape_info,
         prim_ref=prim_ref,
@@ -372,7 +379,28 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
     else:
         bounds = np.zeros((2, 3))
     return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names,
-                         material_names=_material_names(scene, materials), triangle_order=tri_order)
+                         material_names=_material_names(scene, materials), triangle_order=tri_order,
+                         triangle_faces=tri_face)
+
+
+def _leaf_ordered(rows: np.ndarray, order: np.ndarray, tail: np.ndarray) -> np.ndarray:
+    """rows[order] followed by tail, in one aligned array (huge pages when large: shading reads a hit's rows)."""
+    out = aligned_zeros((len(order) + len(tail),) + rows.shape[1:], rows.dtype)
+    np.take(rows, order, axis=0, out=out[:len(order)])
+    out[len(order):] = tail
+    return out
+
+
+def _triangle_faces(order: np.ndarray, objects: np.ndarray) -> np.ndarray:
+    """int32 (nt,): each BVH-ordered triangle's face index in its own mesh, from `order` (its index among all the
+    triangles, taken object after object) and its object id."""
+    faces = np.full(len(order), -1, np.int32)
+    if len(order):
+        obj_of_concat = np.empty(len(order), np.int64)
+        obj_of_concat[order] = objects
+        first = np.searchsorted(obj_of_concat, np.arange(obj_of_concat.max() + 1))  # objects come in order
+        faces[:] = order - first[objects]
+    return faces
 
 
 def triangle_arrays(tri_verts: np.ndarray, tri_ids: np.ndarray) -> CompiledScene:

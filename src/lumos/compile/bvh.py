@@ -6,6 +6,7 @@ import numpy as np
 
 from .. import config
 from ..kernels.bvh_build import build_bvh
+from .memory import aligned_copy, aligned_zeros
 
 
 def build(prim_bounds: np.ndarray):
@@ -30,16 +31,14 @@ def pack_nodes(node_box: np.ndarray, node_link: np.ndarray):
 
 
 def wide_nodes(node_box: np.ndarray, node_link: np.ndarray):
-    """The 4-wide tree of a packed binary one, packed into 128-byte nodes on 64-byte boundaries: (float32 (nw, 32),
-    its int32 view) — see `kernels.layout.WIDE_*` and `kernels.simd`."""
+    """The 4-wide tree of a packed binary one, packed into 128-byte nodes on 64-byte boundaries (in huge pages when
+    large, `compile.memory`): (float32 (nw, 32), its int32 view) — see `kernels.layout.WIDE_*` and `kernels.simd`."""
     from ..kernels.bvh_build import collapse_wide
     from ..kernels.layout import NODE_COUNT, NODE_FIRST, WIDE_CHILD, WIDE_COUNT
 
     boxes, child, count = collapse_wide(node_box, node_link, NODE_FIRST, NODE_COUNT)
     n = len(boxes)
-    raw = np.zeros(n * 32 + 16, np.float32)  # aligned by hand: a node is two whole cache lines
-    skip = (-raw.ctypes.data % 64) // 4
-    packed = raw[skip:skip + n * 32].reshape(n, 32)
+    packed = aligned_zeros((n, 32), np.float32)  # a node is two whole cache lines
     packed[:, :24] = boxes.reshape(n, 24)
     links = packed.view(np.int32)
     links[:, WIDE_CHILD:WIDE_CHILD + 4] = child
@@ -47,22 +46,19 @@ def wide_nodes(node_box: np.ndarray, node_link: np.ndarray):
     return packed, links
 
 
-def packed_leaves(wide_link: np.ndarray, prim_ref: np.ndarray, tri_verts: np.ndarray):
+def packed_leaves(wide_link: np.ndarray, prim_ref: np.ndarray, tri_verts: np.ndarray, tri_object: np.ndarray,
+                  tri_face: np.ndarray, tri_uvs: np.ndarray):
     """Packed rows for the wide tree's triangle leaves (`kernels.bvh_build.pack_leaves`; rewrites those slots of
-    `wide_link` in place): (float32 (nl, 48) on 64-byte boundaries, its int32 view) — see `kernels.layout.LEAF_*`."""
+    `wide_link` in place): (float32 (nl, 48) on 64-byte boundaries, its int32 view) — see `kernels.layout.LEAF_*`.
+    tri_object, tri_face (int (nt,)) and tri_uvs (bool (nt,)) are each triangle's object id, face in its own mesh
+    and whether it has uvs, in the triangles' (leaf) order."""
     from ..kernels.bvh_build import pack_leaves
-    from ..kernels.layout import LEAF_BASE, LEAF_MASK, WIDE_CHILD, WIDE_COUNT
+    from ..kernels.layout import LEAF_BASE, LEAF_FACE, LEAF_MASK, LEAF_OBJECT, LEAF_UVS, WIDE_CHILD, WIDE_COUNT
 
-    capacity = 4 * len(wide_link)
-    raw = np.zeros(capacity * 48 + 16, np.float32)
-    skip = (-raw.ctypes.data % 64) // 4
-    packed = raw[skip:skip + capacity * 48].reshape(capacity, 48)
+    packed = aligned_zeros((4 * len(wide_link), 48), np.float32)  # room for every slot; pages untouched stay free
     n = pack_leaves(wide_link, WIDE_CHILD, WIDE_COUNT, prim_ref, tri_verts, packed, packed.view(np.int32),
-                    LEAF_BASE, LEAF_MASK)
-    if n < capacity:  # keep the alignment: copy into a fresh aligned block of the right size
-        raw = np.zeros(n * 48 + 16, np.float32)
-        skip = (-raw.ctypes.data % 64) // 4
-        small = raw[skip:skip + n * 48].reshape(n, 48)
-        small[:] = packed[:n]
-        packed = small
+                    LEAF_BASE, LEAF_MASK, np.ascontiguousarray(tri_object, np.int32),
+                    np.ascontiguousarray(tri_face, np.int32), np.ascontiguousarray(tri_uvs, np.bool_),
+                    LEAF_OBJECT, LEAF_FACE, LEAF_UVS)
+    packed = aligned_copy(packed[:n])
     return packed, packed.view(np.int32)

@@ -417,12 +417,15 @@ def collapse_wide(node_box, node_link, first_col, count_col):
 
 
 @njit_alloc
-def pack_leaves(wide_link, child_col, count_col, prim_ref, tri_verts, packed, packed_link, base_col, mask_col):
+def pack_leaves(wide_link, child_col, count_col, prim_ref, tri_verts, packed, packed_link, base_col, mask_col,
+                tri_object, tri_face, tri_uvs, object_col, face_col, uvs_col):
     """Give every wide leaf of one to four triangles (and nothing else) its own packed row for `simd.tri4_test`:
-    packed float32 (nl, >= 36) rows of four lanes (v0.x, v0.y, v0.z, v1.x, ..., v2.z; spare lanes repeat the
+    packed float32 (nl, >= 47) rows of four lanes (v0.x, v0.y, v0.z, v1.x, ..., v2.z; spare lanes repeat the
     first triangle), packed_link its int32 view with the first triangle's index in `base_col` (a leaf's triangles
-    are consecutive: the compile step numbers them in leaf order) and the mask of real lanes in `mask_col`. The
-    slot's count becomes LEAF_PACKED and its child the packed row. Returns the number of rows used."""
+    are consecutive: the compile step numbers them in leaf order), the mask of real lanes in `mask_col`, and per
+    lane the triangle's tri_object and tri_face entries in object_col.. and face_col.. and the mask of lanes whose
+    tri_uvs is set in `uvs_col`. The slot's count becomes LEAF_PACKED and its child the packed row. Returns the
+    number of rows used."""
     n = 0
     for w in range(wide_link.shape[0]):
         for k in range(4):
@@ -437,12 +440,18 @@ def pack_leaves(wide_link, child_col, count_col, prim_ref, tri_verts, packed, pa
             if not ok:
                 continue
             base = prim_ref[first]
+            uvs = 0
             for lane in range(4):
                 r = base + (lane if lane < count else 0)
                 for c in range(9):  # vertex c // 3, axis c % 3 -> row c
                     packed[n, 4 * c + lane] = tri_verts[r, c]
+                packed_link[n, object_col + lane] = tri_object[r]
+                packed_link[n, face_col + lane] = tri_face[r]
+                if lane < count and tri_uvs[r]:
+                    uvs |= 1 << lane
             packed_link[n, base_col] = base
             packed_link[n, mask_col] = (1 << count) - 1
+            packed_link[n, uvs_col] = uvs
             wide_link[w, child_col + k] = n
             wide_link[w, count_col + k] = LEAF_PACKED
             n += 1

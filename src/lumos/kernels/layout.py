@@ -107,10 +107,15 @@ WIDE_COUNT = 28
 # tests at once: its wide slot holds count LEAF_PACKED and the row's index. Rows are 48 float32 (192 bytes) on
 # 64-byte boundaries: columns 0-35 the triangles' coordinates as nine rows of four lanes (v0.x, v0.y, v0.z,
 # v1.x, ..., v2.z), int32 column LEAF_BASE the first triangle's index (the others follow it), LEAF_MASK the
-# mask of lanes that hold a triangle.
+# mask of lanes that hold a triangle; then, per lane, what a ray query reports of a hit, so that its record is
+# read from the row the hit test has just loaded: LEAF_OBJECT..+3 the triangle's object id (tri_info's), LEAF_FACE
+# ..+3 its face index in its own mesh (-1 where it has none), and LEAF_UVS the mask of lanes with uvs.
 LEAF_PACKED = -2
 LEAF_BASE = 36
 LEAF_MASK = 37
+LEAF_OBJECT = 38
+LEAF_FACE = 42
+LEAF_UVS = 46
 
 SceneArrays = namedtuple(
     "SceneArrays",

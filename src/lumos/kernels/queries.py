@@ -42,6 +42,9 @@ from .layout import (
     INFO_KIND,
     INFO_OBJECT,
     INFO_REF,
+    LEAF_FACE,
+    LEAF_OBJECT,
+    LEAF_UVS,
     NODE_COUNT,
     NODE_FIRST,
     SHAPE_BOX,
@@ -116,13 +119,17 @@ def closest_kernel(sa, tri_prim, origins, directions, t_max, t_out, object_out, 
                 uv_out[i, 0] = np.nan
                 uv_out[i, 1] = np.nan
                 continue
-            if ref >= 0:  # a triangle: only what the hit record holds (no shading normal)
+            if ref >= 0 and part >= 0:  # a triangle of a packed leaf: its record is in the row just tested
+                p, n_geo, u, v, obj, prim = _packed_record(geo, surf, o, d, t, ref, b1, b2, part)
+            elif ref >= 0:  # another triangle: only what the hit record holds (no shading normal)
                 p, n_geo, u, v, obj = _triangle_record(surf, o, d, t, ref, b1, b2)
+                prim = np.int64(tri_prim[ref])
             else:
                 p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
+                prim = _prim_of(sa, tri_prim, ref, part)
             t_out[i] = t
             object_out[i] = obj
-            prim_out[i] = _prim_of(sa, tri_prim, ref, part)
+            prim_out[i] = prim
             for k in range(3):
                 point_out[i, k] = p[k]
                 normal_out[i, k] = n_geo[k]
@@ -146,6 +153,27 @@ def _triangle_record(surf, o, d, t, ref, b1, b2):
         u = b0 * uv[ref, 0] + b1 * uv[ref, 2] + b2 * uv[ref, 4]
         v = b0 * uv[ref, 1] + b1 * uv[ref, 3] + b2 * uv[ref, 5]
     return madd(o, d, t), normalize(cross(e1, e2)), u, v, info[INFO_OBJECT]
+
+
+@njit_inline
+def _packed_record(geo, surf, o, d, t, ref, b1, b2, part):
+    """`_triangle_record` plus the face id, of a hit on lane part & 3 of packed leaf row part >> 2, read from that
+    row (`layout.LEAF_*`): the hit test has just loaded it, so an incoherent hit costs no further cache misses
+    (the triangle's rows in tri_verts, tri_info and the face table would be three). Bit for bit the same answer:
+    the row holds the same float32 corners."""
+    row, lane = part >> 2, part & 3
+    lt, ll = geo.leaf_tris, geo.leaf_link
+    v0 = (np.float64(lt[row, lane]), np.float64(lt[row, 4 + lane]), np.float64(lt[row, 8 + lane]))
+    e1 = (lt[row, 12 + lane] - v0[0], lt[row, 16 + lane] - v0[1], lt[row, 20 + lane] - v0[2])
+    e2 = (lt[row, 24 + lane] - v0[0], lt[row, 28 + lane] - v0[1], lt[row, 32 + lane] - v0[2])
+    u, v = b1, b2
+    if ll[row, LEAF_UVS] & (1 << lane):
+        uv = surf.tri_uvs
+        b0 = 1.0 - b1 - b2
+        u = b0 * uv[ref, 0] + b1 * uv[ref, 2] + b2 * uv[ref, 4]
+        v = b0 * uv[ref, 1] + b1 * uv[ref, 3] + b2 * uv[ref, 5]
+    return (madd(o, d, t), normalize(cross(e1, e2)), u, v, ll[row, LEAF_OBJECT + lane],
+            np.int64(ll[row, LEAF_FACE + lane]))
 
 
 @njit_inline

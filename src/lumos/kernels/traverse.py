@@ -89,8 +89,9 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     """Nearest intersection with t_min < t < t_max at shutter time `time`; `geo` is a `layout.Geometry`.
 
     Returns (t, ref, b1, b2, part): ref is a triangle index (>= 0) or ~shape index (< 0); b1, b2 are the
-    barycentrics of a triangle hit, part the face of a shape hit (csg hits: see `kernels.csg`). t = -1 when
-    nothing is hit.
+    barycentrics of a triangle hit, part the face of a shape hit (csg hits: see `kernels.csg`) and, for a
+    triangle hit, 4·row + lane of the packed leaf row that holds it (-1 when it is not in one), so that the
+    caller can read the hit's record from the row just loaded (`layout.LEAF_*`). t = -1 when nothing is hit.
     """
     best_t = t_max
     best_ref = 0
@@ -150,13 +151,14 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
                     if lane >= 0:
                         best_t, best_ref, hit = lane_t, np.int64(geo.leaf_link[first, LEAF_BASE]) + lane, True
                         best_b1, best_b2 = _lane(u0, u1, u2, u3, lane), _lane(w0, w1, w2, w3, lane)
+                        best_part = 4 * first + lane
                     count = 0
                 for k in range(first, first + count):
                     r = geo.prim_ref[k]
                     if r >= 0:
                         t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, best_t)
                         if t > t_min:
-                            best_t, best_ref, best_b1, best_b2, hit = t, r, b1, b2, True
+                            best_t, best_ref, best_b1, best_b2, best_part, hit = t, r, b1, b2, -1, True
                     else:
                         t, part, b1, b2 = _shape_hit(geo, np.int64(~r), o, d, t_min, best_t, time)
                         if t != NO_HIT:
