@@ -296,17 +296,26 @@ class RayCaster:
                else [self._solid_id(x, "contains(object=...)") for x in objects])
         sel = np.zeros(len(self.names), bool)
         sel[[i for i in ids if self._solid[i]]] = True
+        from .kernels.queries import containing_kernel
+
         n = len(p)
         col = np.full(len(self.names), -1)
         col[ids] = np.arange(len(ids))
         votes = np.zeros((n, len(ids)), np.int8)
-        for probe in _PROBES:
-            d = np.broadcast_to(probe, p.shape)
-            seg = self._segments(p, np.ascontiguousarray(d), np.full(n, -np.inf), np.full(n, np.inf), sel)
-            holds = (seg.t_in < 0.0) & (seg.t_out > 0.0)
-            hit = np.zeros((n, len(ids)), bool)
-            hit[seg.ray[holds], col[seg.object_id[holds]]] = True
-            votes += hit
+        overflow = np.zeros(n, bool)
+        containing_kernel(self._arrays, self._tri_prim, self._mesh_closed, self._bounds, p, _PROBES, sel, col,
+                          256, votes, overflow)
+        redo = np.flatnonzero(overflow)  # lines through more than 256 boundaries: the general path
+        if len(redo):
+            q, m = np.ascontiguousarray(p[redo]), len(redo)
+            votes[redo] = 0
+            for probe in _PROBES:
+                d = np.ascontiguousarray(np.broadcast_to(probe, q.shape))
+                seg = self._segments(q, d, np.full(m, -np.inf), np.full(m, np.inf), sel)
+                holds = (seg.t_in < 0.0) & (seg.t_out > 0.0)
+                hit = np.zeros((m, len(ids)), bool)
+                hit[seg.ray[holds], col[seg.object_id[holds]]] = True
+                votes[redo] += hit
         return votes >= 2
 
     def path_length(self, origins, directions, t_max=np.inf, object=None, density=None, t_min=0.0,

@@ -5,7 +5,7 @@ count), and the GIL is released.
 
 Every crossing (`crossings`): the ray's line is clipped to the scene's (padded) bounds [t0, t1], outside which
 it is outside every closed solid; the origin is moved to o + t0·d (so every crossing has t' >= 0 and one
-forward triangle test serves) and the BVH2 is walked in any order, collecting:
+forward triangle test serves) and the wide BVH is walked in any order, collecting:
 
     triangles                       each hit (t, object, face); the same crossing reported by two triangles
                                     sharing an edge or vertex (same object, same side, |Δt| <= 1e-9·|t|) counts once
@@ -30,7 +30,6 @@ from .intersect import (
     _quadratic_roots,
     axial_quadratic,
     box_setup,
-    intersect_node_box,
     intersect_triangle,
     triangle_setup,
 )
@@ -43,10 +42,10 @@ from .layout import (
     INFO_OBJECT,
     INFO_REF,
     LEAF_FACE,
+    LEAF_MASK,
     LEAF_OBJECT,
+    LEAF_PACKED,
     LEAF_UVS,
-    NODE_COUNT,
-    NODE_FIRST,
     SHAPE_BOX,
     SHAPE_CONE,
     SHAPE_CSG,
@@ -55,7 +54,10 @@ from .layout import (
     SHAPE_PLANE,
     SHAPE_RECT,
     SHAPE_SPHERE,
+    WIDE_CHILD,
+    WIDE_COUNT,
 )
+from .simd import box4_test, tri4_test
 from .surface import surface_at
 from .traverse import closest_hit
 from .vec import cross, madd, normalize, xform_point, xform_vector
@@ -307,7 +309,10 @@ def _triangle_crossing(sa, tri_prim, o, setup, d, r, t0, t_far, ts, objs, prims,
 
 @njit
 def _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack):
-    """Every crossing of the line through o along d (module doc), sorted by t: returns n, or -1 on overflow."""
+    """Every crossing of the line through o along d (module doc), sorted by t: returns n, or -1 on overflow. The
+    walk is `traverse`'s wide one, in any order (every crossing is wanted): four child boxes per test
+    (`simd.box4_test`), four triangles per packed leaf row (`simd.tri4_test`, whose hits are those of the scalar
+    test bit for bit), each crossing's facing, object and face read from that row."""
     n = 0
     t0, t1 = _scene_span(bounds, o, d)
     if not (t0 <= t1):
@@ -317,21 +322,41 @@ def _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack):
         n = _shape_crossings(sa, geo, np.int64(sa.unbounded[k]), om, d, t0, ts, objs, prims, codes, n)
         if n < 0:
             return n
-    if sa.node_box.shape[0] == 0 or t1 < t0:
+    nodes = geo.wide_nodes
+    if nodes.shape[0] == 0 or t1 < t0:
         return n
+    link = geo.wide_link
     t_far = (t1 - t0) * (1.0 + 1e-9) + 1e-300
-    box = sa.node_box
-    link = sa.node_link
     rb = box_setup(om, d)
+    ix, iy, iz, ox, oy, oz, nx, ny, nz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5], rb[6], rb[7], rb[8]
+    nx, ny, nz = 4 * nx, 4 * ny, 4 * nz
     setup = triangle_setup(d)
-    node = np.int64(0)
-    if intersect_node_box(box, node, rb, t_far) == NO_HIT:
-        return n
+    kx, ky, kz, sx, sy, sz = setup
+    okx, oky, okz = om[kx], om[ky], om[kz]
+    node = np.int64(0)  # a wide node, or ~(4·node + slot) for a leaf child (`traverse.closest_hit`)
     sp = 0
     while True:
-        count = link[node, NODE_COUNT]
-        if count > 0:
-            first = link[node, NODE_FIRST]
+        if node >= 0:
+            mask, b0, b1, b2, b3 = box4_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_far)
+            for k in range(4):
+                if mask & (1 << k):
+                    stack[sp] = np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 \
+                        else ~(4 * node + k)
+                    sp += 1
+        else:
+            q = ~node
+            first, count = np.int64(link[q >> 2, WIDE_CHILD + (q & 3)]), link[q >> 2, WIDE_COUNT + (q & 3)]
+            if count == LEAF_PACKED:
+                mask, t_0, t_1, t_2, t_3, u0, u1, u2, u3, w0, w1, w2, w3 = tri4_test(
+                    geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_far)
+                mask &= geo.leaf_link[first, LEAF_MASK]
+                for lane in range(4):
+                    if mask & (1 << lane):
+                        t = t_0 if lane == 0 else (t_1 if lane == 1 else (t_2 if lane == 2 else t_3))
+                        n = _packed_crossing(geo, first, lane, d, t0 + t, ts, objs, prims, codes, n)
+                        if n < 0:
+                            return n
+                count = 0
             for k in range(first, first + count):
                 r = sa.prim_ref[k]
                 if r >= 0:
@@ -340,22 +365,24 @@ def _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack):
                     n = _shape_crossings(sa, geo, np.int64(~r), om, d, t0, ts, objs, prims, codes, n)
                 if n < 0:
                     return n
-        else:
-            c = np.int64(link[node, NODE_FIRST])
-            hit_left = intersect_node_box(box, c, rb, t_far) != NO_HIT
-            hit_right = intersect_node_box(box, c + 1, rb, t_far) != NO_HIT
-            if hit_left and hit_right:
-                node = c
-                stack[sp] = c + 1
-                sp += 1
-                continue
-            if hit_left or hit_right:
-                node = c if hit_left else c + 1
-                continue
         if sp == 0:
             return n
         sp -= 1
         node = stack[sp]
+
+
+@njit_inline
+def _packed_crossing(geo, row, lane, d, t, ts, objs, prims, codes, n):
+    """`_triangle_crossing`'s record of a hit at t on lane `lane` of packed leaf row `row`, from that row."""
+    lt = geo.leaf_tris
+    v0 = (np.float64(lt[row, lane]), np.float64(lt[row, 4 + lane]), np.float64(lt[row, 8 + lane]))
+    e1 = (lt[row, 12 + lane] - v0[0], lt[row, 16 + lane] - v0[1], lt[row, 20 + lane] - v0[2])
+    e2 = (lt[row, 24 + lane] - v0[0], lt[row, 28 + lane] - v0[1], lt[row, 32 + lane] - v0[2])
+    dn = ((e1[1] * e2[2] - e1[2] * e2[1]) * d[0] + (e1[2] * e2[0] - e1[0] * e2[2]) * d[1]
+          + (e1[0] * e2[1] - e1[1] * e2[0]) * d[2])
+    code = _MESH | (_ENTER if dn < 0.0 else 0)
+    ll = geo.leaf_link
+    return _insert(ts, objs, prims, codes, n, t, ll[row, LEAF_OBJECT + lane], ll[row, LEAF_FACE + lane], code)
 
 
 @njit
@@ -422,6 +449,59 @@ def crossings(sa, tri_prim, closed, bounds, origins, directions, t_min, t_max, c
                 total += 1
             count_out[i] = got
             total_out[i] = total
+
+
+@njit_parallel
+def containing_kernel(sa, tri_prim, closed, bounds, points, probes, selected, column, cap, votes, overflow):
+    """Point-in-solid votes: for each point and each probe direction (probes float64 (k, 3)), the line through
+    the point along it is gathered and settled as `crossings` does, and every selected solid (selected bool
+    (objects,)) that holds the point on that line gets a vote in votes[i, column[solid]] (int8 (n, columns)).
+    A solid holds the point when its last crossing before it (t < 0) enters and the next one (t > 0) leaves:
+    the piece `RayCaster._segments` would report around t = 0. overflow[i] is set where a line crosses more
+    than `cap` boundaries (votes of that point are then incomplete: the caller redoes it). With three probes,
+    the third line is walked only where the first two disagree on some solid (a majority vote is then settled:
+    votes of 0 or 2 out of two stand for 0-1 or 2-3 out of three)."""
+    n = points.shape[0]
+    n_obj = closed.shape[0]
+    for c in prange((n + _CHUNK - 1) // _CHUNK):
+        geo = geometry_of(sa)
+        stack = np.empty(config.BVH_STACK, np.int64)
+        ts = np.empty(cap)
+        objs = np.empty(cap, np.int32)
+        prims = np.empty(cap, np.int32)
+        codes = np.empty(cap, np.int8)
+        state = np.zeros(n_obj, np.int8)
+        before = np.full(n_obj, -1, np.int8)  # per solid: -1 no crossing before the point, else its entering
+        done = np.zeros(n_obj, np.bool_)
+        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
+            o = (points[i, 0], points[i, 1], points[i, 2])
+            for j in range(probes.shape[0]):
+                d = (probes[j, 0], probes[j, 1], probes[j, 2])
+                m = _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack)
+                if m < 0:
+                    overflow[i] = True
+                    break
+                _settle_meshes(ts, objs, codes, m, closed, state)
+                for k in range(m):
+                    obj = objs[k]
+                    if (codes[k] & _DROP) != 0 or not selected[obj] or done[obj]:
+                        continue
+                    entering = (codes[k] & _ENTER) != 0
+                    if ts[k] < 0.0:
+                        before[obj] = 1 if entering else 0
+                    else:
+                        done[obj] = True
+                        if before[obj] == 1 and not entering and ts[k] > 0.0:
+                            votes[i, column[obj]] += 1
+                for k in range(m):  # reset what this line touched
+                    before[objs[k]] = -1
+                    done[objs[k]] = False
+                if j == 1 and probes.shape[0] == 3:  # two lines that agree on every solid decide the majority
+                    split = False
+                    for col in range(votes.shape[1]):
+                        split = split or votes[i, col] == 1
+                    if not split:
+                        break
 
 
 # ------------------------------------------------------------------------------------------- camera rays
