@@ -42,7 +42,6 @@ from .layout import (
     INFO_OBJECT,
     INFO_REF,
     LEAF_FACE,
-    LEAF_MASK,
     LEAF_OBJECT,
     LEAF_PACKED,
     LEAF_UVS,
@@ -54,12 +53,10 @@ from .layout import (
     SHAPE_PLANE,
     SHAPE_RECT,
     SHAPE_SPHERE,
-    WIDE_CHILD,
-    WIDE_COUNT,
 )
-from .simd import box4_test, tri4_test
+from .simd import box4_test
 from .surface import surface_at
-from .traverse import closest_hit
+from .traverse import closest_hit, leaf_of, packed_leaf, push_children
 from .vec import cross, madd, normalize, xform_point, xform_vector
 from .views import geometry_of, surfaces_of
 
@@ -338,18 +335,12 @@ def _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack):
     while True:
         if node >= 0:
             mask, b0, b1, b2, b3 = box4_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_far)
-            for k in range(4):
-                if mask & (1 << k):
-                    stack[sp] = np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 \
-                        else ~(4 * node + k)
-                    sp += 1
+            sp = push_children(stack, sp, link, node, mask)
         else:
-            q = ~node
-            first, count = np.int64(link[q >> 2, WIDE_CHILD + (q & 3)]), link[q >> 2, WIDE_COUNT + (q & 3)]
+            first, count = leaf_of(link, node)
             if count == LEAF_PACKED:
-                mask, t_0, t_1, t_2, t_3, u0, u1, u2, u3, w0, w1, w2, w3 = tri4_test(
-                    geo.leaf_tris, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_far)
-                mask &= geo.leaf_link[first, LEAF_MASK]
+                mask, t_0, t_1, t_2, t_3, u0, u1, u2, u3, w0, w1, w2, w3 = packed_leaf(
+                    geo, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_far)
                 for lane in range(4):
                     if mask & (1 << lane):
                         t = t_0 if lane == 0 else (t_1 if lane == 1 else (t_2 if lane == 2 else t_3))

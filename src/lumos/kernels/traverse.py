@@ -63,7 +63,7 @@ def _triangle_setup_if(geo, d):
 
 
 @njit_inline
-def _leaf_of(link, node):
+def leaf_of(link, node):
     """(first, count) of the leaf child that stack entry node = ~(4·wide node + slot) names: a prim_ref range, or
     (its packed row, LEAF_PACKED)."""
     q = ~node
@@ -71,11 +71,22 @@ def _leaf_of(link, node):
 
 
 @njit_inline
-def _packed_leaf(geo, row, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
+def packed_leaf(geo, row, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
     """`simd.tri4_test` of packed leaf `row`, its mask limited to the lanes that hold triangles."""
     mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = tri4_test(geo.leaf_tris, row, kx, ky, kz, sx, sy, sz,
                                                                        okx, oky, okz, t_max)
     return mask & geo.leaf_link[row, LEAF_MASK], t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3
+
+
+@njit_inline
+def push_children(stack, sp, link, node, mask):
+    """Push the children of wide node `node` whose bits are set in mask, in slot order (an any-order walk);
+    returns the new stack size."""
+    for k in range(4):
+        if mask & (1 << k):
+            stack[sp] = np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 else ~(4 * node + k)
+            sp += 1
+    return sp
 
 
 @njit_inline
@@ -138,9 +149,9 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
                     continue
             else:
                 # leaf: test its primitives, four triangles at once where it has a packed row
-                first, count = _leaf_of(link, node)
+                first, count = leaf_of(link, node)
                 if count == LEAF_PACKED:
-                    mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = _packed_leaf(
+                    mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = packed_leaf(
                         geo, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, best_t)
                     lane, lane_t = -1, best_t
                     for k in range(4):
@@ -280,15 +291,11 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
     while True:
         if node >= 0:
             mask, t0, t1, t2, t3 = box4_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_max)
-            for k in range(4):
-                if mask & (1 << k):
-                    stack[sp] = np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 \
-                        else ~(4 * node + k)
-                    sp += 1
+            sp = push_children(stack, sp, link, node, mask)
         else:
-            first, count = _leaf_of(link, node)
+            first, count = leaf_of(link, node)
             if count == LEAF_PACKED:
-                mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = _packed_leaf(
+                mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = packed_leaf(
                     geo, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
                 for k in range(4):
                     if mask & (1 << k):
