@@ -193,13 +193,15 @@ def _prim_boxes(scene, arrays):
 
 
 def check_wide_tree(arrays, prim_boxes):
-    """The 4-wide tree that traversal walks: every leaf of the binary tree is one child slot, each slot's box
+    """The wide tree that traversal walks: every leaf of the binary tree is one child slot, each slot's box
     is that leaf's (so every primitive lies in it), empty slots are inverted boxes, and no node is shared."""
+    width = L.WIDE
     wide = np.asarray(arrays.wide_nodes)
     link = np.asarray(arrays.wide_link)
-    assert wide.ctypes.data % 64 == 0 and wide.shape[1] == 32  # two whole cache lines per node
-    boxes = wide[:, :24].reshape(-1, 6, 4).astype(np.float64)
-    child, count = link[:, L.WIDE_CHILD:L.WIDE_CHILD + 4], link[:, L.WIDE_COUNT:L.WIDE_COUNT + 4]
+    assert wide.ctypes.data % 64 == 0 and wide.shape[1] == L.WIDE_SIZE and L.WIDE_SIZE * 4 % 64 == 0  # whole lines
+    assert 1 << L.WIDE_SHIFT == width
+    boxes = wide[:, :6 * width].reshape(-1, 6, width).astype(np.float64)
+    child, count = link[:, L.WIDE_CHILD:L.WIDE_CHILD + width], link[:, L.WIDE_COUNT:L.WIDE_COUNT + width]
     seen_nodes = np.zeros(len(wide), int)
     seen_slots = np.zeros(len(arrays.prim_ref), int)
     slot_of = {int(r): k for k, r in enumerate(arrays.prim_ref)}
@@ -208,7 +210,7 @@ def check_wide_tree(arrays, prim_boxes):
     while stack:
         w = stack.pop()
         seen_nodes[w] += 1
-        for k in range(4):
+        for k in range(L.WIDE):
             lo, hi = boxes[w, :3, k], boxes[w, 3:, k]
             if count[w, k] == L.LEAF_PACKED:  # a packed row of triangles (see check_packed_leaves)
                 row = child[w, k]
@@ -239,8 +241,8 @@ def check_packed_leaves(arrays, faces=None):
     indices (`faces`, the compiled scene's triangle_faces, when given) and uv flags, and its slot no longer points
     into prim_ref; every triangle of the BVH is in one packed row or one plain leaf."""
     link, leaves, leaf_link = np.asarray(arrays.wide_link), np.asarray(arrays.leaf_tris), np.asarray(arrays.leaf_link)
-    count = link[:, L.WIDE_COUNT:L.WIDE_COUNT + 4]
-    rows = link[:, L.WIDE_CHILD:L.WIDE_CHILD + 4][count == L.LEAF_PACKED]
+    count = link[:, L.WIDE_COUNT:L.WIDE_COUNT + L.WIDE]
+    rows = link[:, L.WIDE_CHILD:L.WIDE_CHILD + L.WIDE][count == L.LEAF_PACKED]
     assert sorted(rows) == list(range(len(leaves)))  # every packed row belongs to exactly one slot
     covered = []
     for row in rows:
@@ -254,7 +256,7 @@ def check_packed_leaves(arrays, faces=None):
             has_uvs = bool(arrays.tri_info[base + lane, L.INFO_FLAGS] & L.FLAG_UVS)
             assert bool(leaf_link[row, L.LEAF_UVS] & (1 << lane)) == has_uvs
             covered.append(base + lane)
-    plain = [(f, c) for f, c in zip(link[:, L.WIDE_CHILD:L.WIDE_CHILD + 4][count > 0], count[count > 0])]
+    plain = [(f, c) for f, c in zip(link[:, L.WIDE_CHILD:L.WIDE_CHILD + L.WIDE][count > 0], count[count > 0])]
     refs = arrays.prim_ref
     covered += [int(r) for f, c in plain for r in refs[f:f + c] if r >= 0]
     assert sorted(covered) == sorted(int(r) for r in refs if r >= 0)
@@ -267,7 +269,8 @@ def test_tree_invariants_mixed_scene(mixed):
     assert depth >= 5  # a real tree, not one leaf
     check_wide_tree(compiled.arrays, _prim_boxes(scene, compiled.arrays))
     check_packed_leaves(compiled.arrays, compiled.triangle_faces)
-    assert len(compiled.arrays.wide_nodes) < len(compiled.arrays.node_box) / 2.5  # ~3 binary levels per node
+    # each wide node takes up to WIDE - 1 binary interior nodes: about log2(WIDE) binary levels per wide level
+    assert len(compiled.arrays.wide_nodes) < len(compiled.arrays.node_box) / (0.6 * L.WIDE)
 
 
 def test_packed_triangle_test_vector_code_equals_scalar_twin(rng):
@@ -319,50 +322,57 @@ def test_packed_triangle_test_vector_code_equals_scalar_twin(rng):
 
 
 def test_wide_box_test_vector_code_equals_scalar_twin(rng):
-    """`simd.box4_test` compiled (LLVM <4 x double> code) against its interpreted body and against the binary
-    tree's scalar slab test, lane by lane: same mask, same entry distances, on random boxes, rays from inside
-    and outside, axis-parallel directions, empty slots and finite t_max."""
+    """`simd.wide_box_test` compiled (LLVM <WIDE x double> code) against its interpreted body and against the
+    binary tree's scalar slab test, lane by lane: same mask, same entry distances, on random boxes, rays from
+    inside and outside, axis-parallel directions, empty slots and finite t_max; `wide_box_mask` gives the same
+    mask."""
     import numba
 
     from lumos.kernels.intersect import box_setup, intersect_node_box
-    from lumos.kernels.simd import box4_test
+    from lumos.kernels.simd import wide_box_mask, wide_box_test, wide_setup
+
+    w = L.WIDE
 
     @numba.njit
-    def compiled(nodes, j, rb, t_max):
-        return box4_test(nodes, j, 4 * rb[6], 4 * rb[7], 4 * rb[8], rb[3], rb[4], rb[5], rb[0], rb[1], rb[2],
-                         t_max)
+    def compiled(nodes, j, rb, t_max, entry):
+        nx, ny, nz = wide_setup(rb)
+        mask = wide_box_test(nodes, j, nx, ny, nz, rb[3], rb[4], rb[5], rb[0], rb[1], rb[2], t_max, entry, 3)
+        return mask, wide_box_mask(nodes, j, nx, ny, nz, rb[3], rb[4], rb[5], rb[0], rb[1], rb[2], t_max)
 
     n = 200
-    lo = rng.uniform(-2, 1, (n, 3, 4))
-    hi = lo + rng.uniform(0.0, 1.5, (n, 3, 4))
-    nodes = np.zeros((n, 32), np.float32)
-    nodes[:, :12] = lo.reshape(n, 12)
-    nodes[:, 12:24] = hi.reshape(n, 12)
-    nodes[::7, 8:12:3], nodes[::7, 20:24:3] = np.inf, -np.inf  # some empty slots (z rows of lanes 0 and 3)
-    nodes[::7, 0:4:3], nodes[::7, 4:8:3] = np.inf, np.inf
-    nodes[::7, 12:16:3], nodes[::7, 16:20:3] = -np.inf, -np.inf
+    lo = rng.uniform(-2, 1, (n, 3, w))
+    hi = lo + rng.uniform(0.0, 1.5, (n, 3, w))
+    nodes = np.zeros((n, L.WIDE_SIZE), np.float32)
+    nodes[:, :3 * w] = lo.reshape(n, 3 * w)
+    nodes[:, 3 * w:6 * w] = hi.reshape(n, 3 * w)
+    empty = [(r, k) for r in range(6) for k in (0, w - 1)]  # empty slots 0 and w - 1 in every 7th node
+    for r, k in empty:
+        nodes[::7, r * w + k] = np.inf if r < 3 else -np.inf
     agree = 0
     for i in range(n):
         o = rng.uniform(-3, 3, 3)
-        aim = (lo[i, :, i % 4] + hi[i, :, i % 4]) / 2  # towards one of the boxes, give or take
+        aim = (lo[i, :, i % w] + hi[i, :, i % w]) / 2  # towards one of the boxes, give or take
         d = aim - o + rng.normal(scale=0.3, size=3)
         if i % 5 == 0:
             d[rng.integers(3)] = 0.0  # axis-parallel in one coordinate
         rb = box_setup(o, d)
         t_max = 1e30 if i % 2 else float(rng.uniform(0.5, 4))
-        got = compiled(nodes, i, rb, t_max)
-        twin = box4_test(nodes, i, 4 * rb[6], 4 * rb[7], 4 * rb[8], rb[3], rb[4], rb[5], rb[0], rb[1], rb[2], t_max)
-        assert got[0] == twin[0]
-        np.testing.assert_array_equal(got[1:], twin[1:])
-        for k in range(4):  # against the binary tree's scalar test of the same box
+        got, entry = np.full(w + 4, -7.0), np.full(w + 4, -7.0)
+        mask, mask_only = compiled(nodes, i, rb, t_max, got)
+        twin = wide_box_test(nodes, i, w * rb[6], w * rb[7], w * rb[8], rb[3], rb[4], rb[5], rb[0], rb[1], rb[2],
+                             t_max, entry, 3)
+        assert mask == twin == mask_only
+        np.testing.assert_array_equal(got, entry)  # every lane stored, nothing outside entry[3:3 + w]
+        assert (got[:3] == -7.0).all() and got[-1] == -7.0
+        for k in range(w):  # against the binary tree's scalar test of the same box
             box = np.zeros((1, 8), np.float32)
-            box[0, :6] = nodes[i, k:24:4]
+            box[0, :6] = nodes[i, k:6 * w:w]
             t = intersect_node_box(box, 0, rb, t_max)
-            assert bool(got[0] >> k & 1) == (t != -1.0)
+            assert bool(mask >> k & 1) == (t != -1.0)
             if t != -1.0:
-                assert got[1 + k] == t
+                assert got[3 + k] == t
                 agree += 1
-    assert 100 < agree < 700  # the test saw hits as well as misses
+    assert 100 < agree < 0.9 * n * w  # the test saw hits as well as misses
 
 
 def test_tree_invariants_and_traversal_on_degenerate_inputs(rng):

@@ -9,9 +9,9 @@ BVH_MAX_LEAF = 4
 BVH_BINS = 16
 #: SAH cost of one traversal step (two child-box tests) relative to one primitive test.
 BVH_COST_TRAVERSAL = 1.0
-#: BVH traversal stack depth: the 4-wide walk pushes at most three entries per level and the tree is at most
-#: `kernels.bvh_build.MAX_DEPTH` (60) levels deep, so 3·60 + 1 entries always suffice.
-BVH_STACK = 192
+#: BVH traversal stack depth: the wide walk pushes at most WIDE − 1 = 7 entries per level (`kernels.layout.WIDE`)
+#: and the tree is at most `kernels.bvh_build.MAX_DEPTH` (60) levels deep, so 7·60 + 1 entries always suffice.
+BVH_STACK = 448
 #: Largest image the film will allocate (pixels), and the default render size.
 MAX_PIXELS = 16384 * 16384
 DEFAULT_WIDTH = 640

@@ -31,18 +31,19 @@ def pack_nodes(node_box: np.ndarray, node_link: np.ndarray):
 
 
 def wide_nodes(node_box: np.ndarray, node_link: np.ndarray):
-    """The 4-wide tree of a packed binary one, packed into 128-byte nodes on 64-byte boundaries (in huge pages when
-    large, `compile.memory`): (float32 (nw, 32), its int32 view) — see `kernels.layout.WIDE_*` and `kernels.simd`."""
+    """The wide tree of a packed binary one, packed into nodes of WIDE_SIZE float32 (whole cache lines) on 64-byte
+    boundaries (in huge pages when large, `compile.memory`): (float32 (nw, WIDE_SIZE), its int32 view) — see
+    `kernels.layout.WIDE_*` and `kernels.simd`."""
     from ..kernels.bvh_build import collapse_wide
-    from ..kernels.layout import NODE_COUNT, NODE_FIRST, WIDE_CHILD, WIDE_COUNT
+    from ..kernels.layout import NODE_COUNT, NODE_FIRST, WIDE, WIDE_CHILD, WIDE_COUNT, WIDE_SIZE
 
     boxes, child, count = collapse_wide(node_box, node_link, NODE_FIRST, NODE_COUNT)
     n = len(boxes)
-    packed = aligned_zeros((n, 32), np.float32)  # a node is two whole cache lines
-    packed[:, :24] = boxes.reshape(n, 24)
+    packed = aligned_zeros((n, WIDE_SIZE), np.float32)
+    packed[:, :6 * WIDE] = boxes.reshape(n, 6 * WIDE)
     links = packed.view(np.int32)
-    links[:, WIDE_CHILD:WIDE_CHILD + 4] = child
-    links[:, WIDE_COUNT:WIDE_COUNT + 4] = count
+    links[:, WIDE_CHILD:WIDE_CHILD + WIDE] = child
+    links[:, WIDE_COUNT:WIDE_COUNT + WIDE] = count
     return packed, links
 
 
@@ -53,9 +54,9 @@ def packed_leaves(wide_link: np.ndarray, prim_ref: np.ndarray, tri_verts: np.nda
     tri_object, tri_face (int (nt,)) and tri_uvs (bool (nt,)) are each triangle's object id, face in its own mesh
     and whether it has uvs, in the triangles' (leaf) order."""
     from ..kernels.bvh_build import pack_leaves
-    from ..kernels.layout import LEAF_BASE, LEAF_FACE, LEAF_MASK, LEAF_OBJECT, LEAF_UVS, WIDE_CHILD, WIDE_COUNT
+    from ..kernels.layout import LEAF_BASE, LEAF_FACE, LEAF_MASK, LEAF_OBJECT, LEAF_UVS, WIDE, WIDE_CHILD, WIDE_COUNT
 
-    packed = aligned_zeros((4 * len(wide_link), 48), np.float32)  # room for every slot; pages untouched stay free
+    packed = aligned_zeros((WIDE * len(wide_link), 48), np.float32)  # room for every slot; pages untouched stay free
     n = pack_leaves(wide_link, WIDE_CHILD, WIDE_COUNT, prim_ref, tri_verts, packed, packed.view(np.int32),
                     LEAF_BASE, LEAF_MASK, np.ascontiguousarray(tri_object, np.int32),
                     np.ascontiguousarray(tri_face, np.int32), np.ascontiguousarray(tri_uvs, np.bool_),

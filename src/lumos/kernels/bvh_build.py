@@ -13,7 +13,7 @@ Parallelism: the top of the tree is built first (large nodes bin in parallel chu
 import numpy as np
 
 from .jit import njit_alloc, njit_parallel, prange
-from .layout import LEAF_PACKED
+from .layout import LEAF_PACKED, WIDE
 
 #: Trees deeper than this make leaves (the traversal stack is 64 entries; one push per level at most).
 MAX_DEPTH = 60
@@ -339,19 +339,17 @@ def build_bvh(bounds, max_leaf, n_bins, cost_traversal):
     return out_box, out_link, order, depth
 
 
-# ------------------------------------------------------------------------------------------ the 4-wide tree
-
-#: Child slots of a wide node.
-WIDE = 4
+# ------------------------------------------------------------------------------------------- the wide tree
 
 
 @njit_alloc
 def collapse_wide(node_box, node_link, first_col, count_col):
-    """The 4-wide BVH of a binary one (packed nodes: bounds in columns 0-5, links in `first_col`/`count_col` of
-    the int32 view `node_link`): each wide node takes a binary interior node's children and keeps opening the
-    largest interior one among them until it holds four (Wald et al. 2008, "Getting rid of packets"; Embree's
-    BVH4 collapse). Returns (boxes float32 (nw, 6, 4): per bound row, the four children's values; child int32
-    (nw, 4): a wide node index (count 0) or the first prim_ref entry of a leaf; count int32 (nw, 4): the leaf's
+    """The WIDE-wide BVH (`layout.WIDE`) of a binary one (packed nodes: bounds in columns 0-5, links in
+    `first_col`/`count_col` of the int32 view `node_link`): each wide node takes a binary interior node's
+    children and keeps opening the largest interior one among them until it holds WIDE (Wald et al. 2008,
+    "Getting rid of packets"; Embree's BVH4/BVH8 collapse). Returns (boxes float32 (nw, 6, WIDE): per bound row,
+    the children's values; child int32 (nw, WIDE): a wide node index (count 0) or the first prim_ref entry of a
+    leaf; count int32 (nw, WIDE): the leaf's
     primitive count, 0 for a wide node, -1 for an empty slot, whose box is inverted (+inf min, -inf max) so that
     every ray misses it). The wide tree is no deeper than the binary one."""
     nn = node_box.shape[0]
@@ -428,7 +426,7 @@ def pack_leaves(wide_link, child_col, count_col, prim_ref, tri_verts, packed, pa
     number of rows used."""
     n = 0
     for w in range(wide_link.shape[0]):
-        for k in range(4):
+        for k in range(WIDE):
             count = wide_link[w, count_col + k]
             if count <= 0 or count > 4:
                 continue

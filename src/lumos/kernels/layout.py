@@ -97,12 +97,16 @@ CAM_SIZE = 5
 NODE_FIRST = 6
 NODE_COUNT = 7
 
-# The 4-wide tree that traversal walks (built from the binary one, `compile.bvh.wide_nodes`): 128 bytes per node,
-# on 64-byte boundaries. Float32 columns 0-23: six bound rows (min x, y, z, max x, y, z) of the four children's
-# values each, as `kernels.simd.box4_test` loads them; int32 columns WIDE_CHILD..+3: each child's wide node index
-# or first prim_ref entry; WIDE_COUNT..+3: its leaf primitive count (0: a wide node; -1: an empty slot).
-WIDE_CHILD = 24
-WIDE_COUNT = 28
+# The wide tree that traversal walks (built from the binary one, `compile.bvh.wide_nodes`): WIDE children per
+# node, 32·WIDE bytes on 64-byte boundaries. Float32 columns 0 .. 6·WIDE-1: six bound rows (min x, y, z, max x,
+# y, z) of the children's values each, as `kernels.simd.wide_box_test` loads them; int32 columns WIDE_CHILD..: each
+# child's wide node index or first prim_ref entry; WIDE_COUNT..: its leaf primitive count (0: a wide node; -1: an
+# empty slot). A traversal stack entry is a wide node index, or ~(WIDE·node + slot) for a leaf child.
+WIDE = 8
+WIDE_SHIFT = 3  # log2(WIDE)
+WIDE_CHILD = 6 * WIDE
+WIDE_COUNT = 7 * WIDE
+WIDE_SIZE = 8 * WIDE  # columns per node
 # A leaf of one to four triangles has a packed row (`compile.bvh.packed_leaves`) that `kernels.simd.tri4_test`
 # tests at once: its wide slot holds count LEAF_PACKED and the row's index. Rows are 48 float32 (192 bytes) on
 # 64-byte boundaries: columns 0-35 the triangles' coordinates as nine rows of four lanes (v0.x, v0.y, v0.z,
@@ -130,8 +134,8 @@ SceneArrays = namedtuple(
         "prim_ref",  # int32 (np,): BVH leaf order -> triangle (>= 0) or ~shape (< 0)
         "node_box",  # float32 (nn, 8): min xyz, max xyz in columns 0-5 (columns 6-7 hold the link bits)
         "node_link",  # int32 (nn, 8): an int32 view of node_box; columns NODE_FIRST, NODE_COUNT
-        "wide_nodes",  # float32 (nw, 32): the 4-wide tree, see WIDE_*
-        "wide_link",  # int32 (nw, 32): an int32 view of wide_nodes
+        "wide_nodes",  # float32 (nw, WIDE_SIZE): the wide tree, see WIDE_*
+        "wide_link",  # int32 (nw, WIDE_SIZE): an int32 view of wide_nodes
         "leaf_tris",  # float32 (nl, 48): packed triangle leaves, see LEAF_*
         "leaf_link",  # int32 (nl, 48): an int32 view of leaf_tris
         "unbounded",  # int32 (nu,): shapes tested outside the BVH

@@ -54,7 +54,7 @@ from .layout import (
     SHAPE_RECT,
     SHAPE_SPHERE,
 )
-from .simd import box4_test
+from .simd import wide_box_mask, wide_setup
 from .surface import surface_at
 from .traverse import closest_hit, leaf_of, packed_leaf, push_children
 from .vec import cross, madd, normalize, xform_point, xform_vector
@@ -307,8 +307,8 @@ def _triangle_crossing(sa, tri_prim, o, setup, d, r, t0, t_far, ts, objs, prims,
 @njit
 def _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack):
     """Every crossing of the line through o along d (module doc), sorted by t: returns n, or -1 on overflow. The
-    walk is `traverse`'s wide one, in any order (every crossing is wanted): four child boxes per test
-    (`simd.box4_test`), four triangles per packed leaf row (`simd.tri4_test`, whose hits are those of the scalar
+    walk is `traverse`'s wide one, in any order (every crossing is wanted): all of a node's child boxes per test
+    (`simd.wide_box_mask`), four triangles per packed leaf row (`simd.tri4_test`, whose hits are those of the scalar
     test bit for bit), each crossing's facing, object and face read from that row."""
     n = 0
     t0, t1 = _scene_span(bounds, o, d)
@@ -325,16 +325,16 @@ def _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack):
     link = geo.wide_link
     t_far = (t1 - t0) * (1.0 + 1e-9) + 1e-300
     rb = box_setup(om, d)
-    ix, iy, iz, ox, oy, oz, nx, ny, nz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5], rb[6], rb[7], rb[8]
-    nx, ny, nz = 4 * nx, 4 * ny, 4 * nz
+    ix, iy, iz, ox, oy, oz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5]
+    nx, ny, nz = wide_setup(rb)
     setup = triangle_setup(d)
     kx, ky, kz, sx, sy, sz = setup
     okx, oky, okz = om[kx], om[ky], om[kz]
-    node = np.int64(0)  # a wide node, or ~(4·node + slot) for a leaf child (`traverse.closest_hit`)
+    node = np.int64(0)  # a wide node, or ~(WIDE·node + slot) for a leaf child (`traverse.closest_hit`)
     sp = 0
     while True:
         if node >= 0:
-            mask, b0, b1, b2, b3 = box4_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_far)
+            mask = wide_box_mask(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_far)
             sp = push_children(stack, sp, link, node, mask)
         else:
             first, count = leaf_of(link, node)

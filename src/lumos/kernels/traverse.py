@@ -1,11 +1,11 @@
 """BVH traversal: closest hit, any hit and shadow-ray transmittance, with a fixed stack supplied by the caller (one
 per thread/row).
 
-The walk is over the 4-wide tree (`layout.WIDE_*`, collapsed from the binary SAH tree at compile time): at an
-interior node the four child boxes are tested at once with explicit SIMD (`simd.box4_test`), the children hit
-are pushed with their entry distances sorted so that the nearest is visited next, and a popped entry is skipped
-once a closer hit is known. A stack entry is a wide node index, or ~(4·node + slot) for a leaf child, whose
-primitives are tested in place. Unbounded shapes (planes) are tested before the tree. A csg object is one shape
+The walk is over the wide tree (`layout.WIDE_*`: WIDE children per node, collapsed from the binary SAH tree at
+compile time): at an interior node all the child boxes are tested at once with explicit SIMD
+(`simd.wide_box_test`), the children hit are pushed with their entry distances sorted so that the nearest is
+visited next, and a popped entry is skipped once a closer hit is known. A stack entry is a wide node index, or
+~(WIDE·node + slot) for a leaf child, whose primitives are tested in place. Unbounded shapes (planes) are tested before the tree. A csg object is one shape
 whose test (`kernels.csg`) also fills b1 and b2 of the hit record.
 """
 
@@ -30,10 +30,12 @@ from .layout import (
     SHAPE_CSG,
     SHAPE_CYLINDER,
     SHAPE_SPHERE,
+    WIDE,
     WIDE_CHILD,
     WIDE_COUNT,
+    WIDE_SHIFT,
 )
-from .simd import box4_test, tri4_test
+from .simd import lowest_bit, tri4_test, wide_box_mask, wide_box_test, wide_setup
 from .vec import xform_point, xform_vector
 
 #: Transmittance below which a shadow ray counts as blocked.
@@ -64,10 +66,11 @@ def _triangle_setup_if(geo, d):
 
 @njit_inline
 def leaf_of(link, node):
-    """(first, count) of the leaf child that stack entry node = ~(4·wide node + slot) names: a prim_ref range, or
-    (its packed row, LEAF_PACKED)."""
+    """(first, count) of the leaf child that stack entry node = ~(WIDE·wide node + slot) names: a prim_ref range,
+    or (its packed row, LEAF_PACKED)."""
     q = ~node
-    return np.int64(link[q >> 2, WIDE_CHILD + (q & 3)]), link[q >> 2, WIDE_COUNT + (q & 3)]
+    return np.int64(link[q >> WIDE_SHIFT, WIDE_CHILD + (q & (WIDE - 1))]), link[q >> WIDE_SHIFT,
+                                                                              WIDE_COUNT + (q & (WIDE - 1))]
 
 
 @njit_inline
@@ -82,11 +85,18 @@ def packed_leaf(geo, row, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max):
 def push_children(stack, sp, link, node, mask):
     """Push the children of wide node `node` whose bits are set in mask, in slot order (an any-order walk);
     returns the new stack size."""
-    for k in range(4):
-        if mask & (1 << k):
-            stack[sp] = np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 else ~(4 * node + k)
-            sp += 1
+    while mask != 0:
+        k = lowest_bit(mask)
+        mask &= mask - 1
+        stack[sp] = _child(link, node, k)
+        sp += 1
     return sp
+
+
+@njit_inline
+def _child(link, node, k):
+    """The stack entry of child slot k of wide node `node`: its wide node index, or ~(WIDE·node + k) for a leaf."""
+    return np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 else ~(WIDE * node + k)
 
 
 @njit_inline
@@ -119,30 +129,31 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     link = geo.wide_link
     if nodes.shape[0] > 0:
         rb = box_setup(o, d)
-        ix, iy, iz, ox, oy, oz, nx, ny, nz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5], rb[6], rb[7], rb[8]
-        nx, ny, nz = 4 * nx, 4 * ny, 4 * nz  # box_setup's near column (0/3, 1/4, 2/5) -> the node's near row
+        ix, iy, iz, ox, oy, oz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5]
+        nx, ny, nz = wide_setup(rb)  # box_setup's near column (0/3, 1/4, 2/5) -> the node's near row
         setup = _triangle_setup_if(geo, d)
         kx, ky, kz, sx, sy, sz = setup
         okx, oky, okz = o[kx], o[ky], o[kz]
-        node = np.int64(0)  # a wide node index (>= 0) or ~(4·node + slot) for a leaf child (int64 throughout)
+        node = np.int64(0)  # a wide node index (>= 0) or ~(WIDE·node + slot) for a leaf child (int64 throughout)
+        scratch = stack_t.shape[0] - WIDE  # the top WIDE entries of stack_t hold a node's child entry distances
         sp = 0
         while True:
             if node >= 0:
-                # interior: test the four child boxes at once; push the hit ones, nearest on top
-                mask, t0, t1, t2, t3 = box4_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, best_t)
+                # interior: test all the child boxes at once; push the hit ones, nearest on top
+                mask = wide_box_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, best_t, stack_t, scratch)
                 base = sp
-                for k in range(4):
-                    if mask & (1 << k):
-                        tk = t0 if k == 0 else (t1 if k == 1 else (t2 if k == 2 else t3))
-                        ref = np.int64(link[node, WIDE_CHILD + k]) if link[node, WIDE_COUNT + k] == 0 \
-                            else ~(4 * node + k)
-                        # insertion into stack[base:sp] kept sorted by decreasing distance
-                        j = sp
-                        while j > base and stack_t[j - 1] < tk:
-                            stack[j], stack_t[j] = stack[j - 1], stack_t[j - 1]
-                            j -= 1
-                        stack[j], stack_t[j] = ref, tk
-                        sp += 1
+                while mask != 0:
+                    k = lowest_bit(mask)
+                    mask &= mask - 1
+                    tk = stack_t[scratch + k]
+                    ref = _child(link, node, k)
+                    # insertion into stack[base:sp] kept sorted by decreasing distance
+                    j = sp
+                    while j > base and stack_t[j - 1] < tk:
+                        stack[j], stack_t[j] = stack[j - 1], stack_t[j - 1]
+                        j -= 1
+                    stack[j], stack_t[j] = ref, tk
+                    sp += 1
                 if sp > base:
                     sp -= 1
                     node = stack[sp]
@@ -281,16 +292,16 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
     if nodes.shape[0] == 0:
         return (tr, tg, tb), True
     rb = box_setup(o, d)
-    ix, iy, iz, ox, oy, oz, nx, ny, nz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5], rb[6], rb[7], rb[8]
-    nx, ny, nz = 4 * nx, 4 * ny, 4 * nz
+    ix, iy, iz, ox, oy, oz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5]
+    nx, ny, nz = wide_setup(rb)
     setup = _triangle_setup_if(geo, d)
     kx, ky, kz, sx, sy, sz = setup
     okx, oky, okz = o[kx], o[ky], o[kz]
-    node = np.int64(0)  # as in closest_hit: a wide node, or ~(4·node + slot) for a leaf child
+    node = np.int64(0)  # as in closest_hit: a wide node, or ~(WIDE·node + slot) for a leaf child
     sp = 0
     while True:
         if node >= 0:
-            mask, t0, t1, t2, t3 = box4_test(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_max)
+            mask = wide_box_mask(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_max)
             sp = push_children(stack, sp, link, node, mask)
         else:
             first, count = leaf_of(link, node)
