@@ -375,6 +375,30 @@ def test_wide_box_test_vector_code_equals_scalar_twin(rng):
     assert 100 < agree < 0.9 * n * w  # the test saw hits as well as misses
 
 
+def test_lowest_bit_compiled_equals_twin():
+    """`simd.lowest_bit` (LLVM cttz) walks the set bits of every mask a wide node can return, lowest first."""
+    import numba
+
+    from lumos import config
+    from lumos.kernels.simd import lowest_bit
+
+    @numba.njit
+    def bits(mask):
+        out = []
+        while mask != 0:
+            out.append(lowest_bit(mask))
+            mask &= mask - 1
+        return out
+
+    for mask in range(1 << L.WIDE):
+        assert list(bits(np.int64(mask))) == [k for k in range(L.WIDE) if mask >> k & 1]
+        if mask:
+            assert lowest_bit(mask) == bits(np.int64(mask))[0]
+    from lumos.kernels.bvh_build import MAX_DEPTH
+
+    assert (L.WIDE - 1) * MAX_DEPTH + 1 <= config.BVH_STACK - L.WIDE  # the deepest stack stays below the scratch
+
+
 def test_tree_invariants_and_traversal_on_degenerate_inputs(rng):
     # 40 identical spheres (all centroids equal: no SAH split exists) + exponentially spaced tiny triangles
     # (binning puts nearly all of them in the first bin, level after level)

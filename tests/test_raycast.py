@@ -228,6 +228,13 @@ def test_aovs_depth_normal_object_albedo():
     # albedo = kd of the object hit
     kd = np.array([[0.9, 0.1, 0.2], [0.1, 0.8, 0.3], [0.5, 0.5, 0.5]], np.float32)
     np.testing.assert_array_equal(albedo[hit], kd[obj[hit]])
+    # the image does not depend on which AOVs are asked for (without any, their buffers are not filled at all)
+    bare = render(scene, width=W, height=H)
+    assert bare.aovs == {}
+    np.testing.assert_array_equal(bare.array, img.array)
+    one = render(scene, width=W, height=H, aov=["normal"])
+    assert set(one.aovs) == {"normal"}
+    np.testing.assert_array_equal(one.aovs["normal"], normal)
 
 
 # --------------------------------------------------------------------------------- pixels and samples

@@ -10,7 +10,8 @@ BVH_BINS = 16
 #: SAH cost of one traversal step (two child-box tests) relative to one primitive test.
 BVH_COST_TRAVERSAL = 1.0
 #: BVH traversal stack depth: the wide walk pushes at most WIDE − 1 = 7 entries per level (`kernels.layout.WIDE`)
-#: and the tree is at most `kernels.bvh_build.MAX_DEPTH` (60) levels deep, so 7·60 + 1 entries always suffice.
+#: and the tree is at most `kernels.bvh_build.MAX_DEPTH` (60) levels deep, so 7·60 + 1 entries always suffice;
+#: the closest-hit walk keeps a node's WIDE child entry distances in the top WIDE entries of its float stack.
 BVH_STACK = 448
 #: Largest image the film will allocate (pixels), and the default render size.
 MAX_PIXELS = 16384 * 16384

@@ -54,11 +54,14 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
 
 
 @njit_parallel
-def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
-                  radiance, depth, normal, albedo, object_id, terms, want_terms, rays_per_row, explain, light_log):
-    """One band of rows: `spp` camera rays per pixel, box-filtered; with `want_terms`, the mean of the samples'
-    terms (ambient, diffuse, specular, emitted; reflected and transmitted stay 0) in terms[y, x, :18]. At pixel
-    `explain` (x, y), the first sample's per-light shares go to `light_log` (`lumos.explain`)."""
+def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, radiance, depth, normal, albedo,
+                  object_id, terms, want_terms, rays_per_row, explain, light_log):
+    """One band of rows: `spp` camera rays per pixel, box-filtered; the first sample's depth, normal, albedo and
+    object id in those (H, W) buffers, or nowhere when they are None (Numba compiles that case apart, without
+    the stores: even an untaken branch to them costs a tenth of a render of a large mesh); with `want_terms`, the
+    mean of the samples' terms (ambient, diffuse, specular, emitted; reflected and transmitted stay 0) in
+    terms[y, x, :18]. At pixel `explain` (x, y), the first sample's per-light shares go to `light_log`
+    (`lumos.explain`)."""
     for y in prange(y0, y1):
         # per row: parfor bodies cannot capture a namedtuple built outside them
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
@@ -93,11 +96,12 @@ def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed,
                 r += rgb[0]
                 g += rgb[1]
                 b += rgb[2]
-                if s == 0:  # AOVs come from the first sample of each pixel
-                    depth[y, x] = hit[0]
-                    normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_sh
-                    albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = kd
-                    object_id[y, x] = obj
+                if depth is not None:  # (a compile-time test: see above)
+                    if s == 0:  # AOVs come from the first sample of each pixel
+                        depth[y, x] = hit[0]
+                        normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_sh
+                        albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = kd
+                        object_id[y, x] = obj
             radiance[y, x, 0] = r * inv
             radiance[y, x, 1] = g * inv
             radiance[y, x, 2] = b * inv
@@ -122,7 +126,10 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
     spp = 1 if settings.antialias == "none" else settings.spp
     cam_vecs, cam_params = camera_arrays(camera)
     radiance = np.zeros((height, width, 3), np.float32)
-    depth, normal, albedo, object_id = allocate_aovs(height, width)
+    # the depth, normal, albedo and object id buffers only when one of them is asked for (writing them costs about
+    # a fifth of a render of a large mesh: BENCHMARKS.md)
+    want_aovs = any(name in ("depth", "normal", "albedo", "object_id") for name in settings.aov)
+    depth, normal, albedo, object_id = allocate_aovs(height, width) if want_aovs else (None, None, None, None)
     want_terms = any(name in TERM_AOVS for name in settings.aov)
     terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
     rays_per_row = np.zeros(height, np.int64)
@@ -130,8 +137,8 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
     if explain is not None:
         pixel, light_log, bands = np.array(explain[:2], np.int64), explain[2], [(explain[1], explain[1] + 1)]
     for y0, y1 in bands:
-        _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, y0, y1, spp, settings.seed,
-                      radiance, depth, normal, albedo, object_id, terms, want_terms, rays_per_row, pixel, light_log)
+        _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, y0, y1, spp, settings.seed, radiance,
+                      depth, normal, albedo, object_id, terms, want_terms, rays_per_row, pixel, light_log)
         if progress is not None:
             progress(y1 / height)
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
