@@ -113,6 +113,8 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     barycentrics of a triangle hit, part the face of a shape hit (csg hits: see `kernels.csg`) and, for a
     triangle hit, 4·row + lane of the packed leaf row that holds it (-1 when it is not in one), so that the
     caller can read the hit's record from the row just loaded (`layout.LEAF_*`). t = -1 when nothing is hit.
+    stack (int64) and stack_t (float64) are the caller's, of equal length (`config.BVH_STACK`); the top WIDE
+    entries of stack_t hold the entry distances of the node just tested, so the walk itself stays below them.
     """
     best_t = t_max
     best_ref = 0
