@@ -15,7 +15,7 @@ import numpy as np
 from .jit import njit_alloc, njit_parallel, prange
 from .layout import LEAF_PACKED, WIDE
 
-#: Trees deeper than this make leaves (the traversal stack is 64 entries; one push per level at most).
+#: Trees deeper than this make leaves (the traversal stack, `config.BVH_STACK`, is sized for this depth).
 MAX_DEPTH = 60
 #: Nodes with at least this many primitives bin in parallel chunks.
 PARALLEL_MIN = 1 << 16

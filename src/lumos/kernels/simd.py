@@ -159,8 +159,7 @@ def _cttz(typingctx, mask):
     def codegen(context, builder, signature, args):
         i64 = ir.IntType(64)
         fn = builder.module.declare_intrinsic("llvm.cttz", [i64], ir.FunctionType(i64, [i64, ir.IntType(1)]))
-        return builder.call(fn, [builder.sext(args[0], i64) if args[0].type != i64 else args[0],
-                                 ir.Constant(ir.IntType(1), 1)])
+        return builder.call(fn, [args[0], ir.Constant(ir.IntType(1), 1)])  # 1: mask == 0 is never asked
 
     return sig, codegen
 

@@ -5,8 +5,8 @@ The walk is over the wide tree (`layout.WIDE_*`: WIDE children per node, collaps
 compile time): at an interior node all the child boxes are tested at once with explicit SIMD
 (`simd.wide_box_test`), the children hit are pushed with their entry distances sorted so that the nearest is
 visited next, and a popped entry is skipped once a closer hit is known. A stack entry is a wide node index, or
-~(WIDE·node + slot) for a leaf child, whose primitives are tested in place. Unbounded shapes (planes) are tested before the tree. A csg object is one shape
-whose test (`kernels.csg`) also fills b1 and b2 of the hit record.
+~(WIDE·node + slot) for a leaf child, whose primitives are tested in place. Unbounded shapes (planes) are tested
+before the tree. A csg object is one shape whose test (`kernels.csg`) also fills b1 and b2 of the hit record.
 """
 
 import numpy as np
@@ -69,8 +69,8 @@ def leaf_of(link, node):
     """(first, count) of the leaf child that stack entry node = ~(WIDE·wide node + slot) names: a prim_ref range,
     or (its packed row, LEAF_PACKED)."""
     q = ~node
-    return np.int64(link[q >> WIDE_SHIFT, WIDE_CHILD + (q & (WIDE - 1))]), link[q >> WIDE_SHIFT,
-                                                                              WIDE_COUNT + (q & (WIDE - 1))]
+    w, k = q >> WIDE_SHIFT, q & (WIDE - 1)
+    return np.int64(link[w, WIDE_CHILD + k]), link[w, WIDE_COUNT + k]
 
 
 @njit_inline
