@@ -4,7 +4,7 @@
 RAY_EPSILON = 1e-4
 #: A distance larger than any in a scene: "no hit yet". Finite on purpose (fastmath may fold np.inf away).
 T_FAR = 1e30
-#: BVH: primitives per leaf at most, and SAH bins.
+#: BVH: leaf size at most, in triangles (an analytic shape counts as four: a leaf holds one), and SAH bins.
 BVH_MAX_LEAF = 4
 BVH_BINS = 16
 #: SAH cost of one traversal step (two child-box tests) relative to one primitive test.

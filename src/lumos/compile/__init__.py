@@ -322,7 +322,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
     for k, s in enumerate(bounded):
         prim_bounds[n_tri + k] = shapes.bounds[s]
     t0 = time.perf_counter()
-    node_box, node_link, order, depth = build(prim_bounds)
+    node_box, node_link, order, depth = build(prim_bounds, first_shape=n_tri)
     build_s = time.perf_counter() - t0
     node_box, node_link = pack_nodes(node_box, node_link)
     wide_box, wide_link = wide_nodes(node_box, node_link)

@@ -9,13 +9,15 @@ from ..kernels.bvh_build import build_bvh
 from .memory import aligned_copy, aligned_zeros
 
 
-def build(prim_bounds: np.ndarray):
-    """BVH over boxes float64 (n, 6). Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,),
+def build(prim_bounds: np.ndarray, first_shape: int | None = None):
+    """BVH over boxes float64 (n, 6): triangles, then (from `first_shape` on; default: none) analytic shapes,
+    which the SAH weighs as four triangles' test each (`kernels.bvh_build._weight`). Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,),
     depth). An empty scene gives an empty tree."""
     if len(prim_bounds) == 0:
         return np.zeros((0, 6), np.float32), np.zeros((0, 2), np.int32), np.zeros(0, np.int64), 0
     bounds = np.ascontiguousarray(prim_bounds, dtype=np.float64)
-    return build_bvh(bounds, config.BVH_MAX_LEAF, config.BVH_BINS, float(config.BVH_COST_TRAVERSAL))
+    first = len(bounds) if first_shape is None else first_shape
+    return build_bvh(bounds, np.int64(first), config.BVH_MAX_LEAF, config.BVH_BINS, float(config.BVH_COST_TRAVERSAL))
 
 
 def pack_nodes(node_box: np.ndarray, node_link: np.ndarray):

@@ -52,20 +52,22 @@ def _grow(dst, src):
 
 
 @njit_alloc
-def _bin_range(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count):
-    """Accumulate primitives order[start:end] into per-axis bins (bin_box (3, B, 6), bin_count (3, B))."""
+def _bin_range(order, start, end, bounds, cent, cbox, scale, first_shape, bin_box, bin_count):
+    """Accumulate primitives order[start:end] into per-axis bins (bin_box (3, B, 6), bin_count (3, B) of their
+    `_weight`s)."""
     n_bins = bin_count.shape[1]
     for i in range(start, end):
         p = order[i]
+        w = _weight(p, first_shape)
         for a in range(3):
             b = int((cent[p, a] - cbox[a]) * scale[a])
             b = min(max(b, 0), n_bins - 1)
-            bin_count[a, b] += 1
+            bin_count[a, b] += w
             _grow(bin_box[a, b], bounds[p])
 
 
 @njit_parallel
-def _bin_parallel(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count):
+def _bin_parallel(order, start, end, bounds, cent, cbox, scale, first_shape, bin_box, bin_count):
     n_bins = bin_count.shape[1]
     boxes = np.empty((_CHUNKS, 3, n_bins, 6))
     counts = np.zeros((_CHUNKS, 3, n_bins), np.int64)
@@ -75,7 +77,7 @@ def _bin_parallel(order, start, end, bounds, cent, cbox, scale, bin_box, bin_cou
         lo = start + c * step
         hi = min(end, lo + step)
         if lo < hi:
-            _bin_range(order, lo, hi, bounds, cent, cbox, scale, boxes[c], counts[c])
+            _bin_range(order, lo, hi, bounds, cent, cbox, scale, first_shape, boxes[c], counts[c])
     for c in range(_CHUNKS):
         for a in range(3):
             for b in range(n_bins):
@@ -85,17 +87,25 @@ def _bin_parallel(order, start, end, bounds, cent, cbox, scale, bin_box, bin_cou
 
 @njit_alloc
 def _blocks(n):
-    """SAH cost of testing n primitives in a leaf: the packed leaf test (`simd.tri4_test`) takes four triangles
-    at the price of one, so the cost counts blocks of four, ceil(n / 4), not primitives (Embree's SAH does the
-    same for its four-wide leaves). With a traversal step costing one block, every node of at most four
-    primitives becomes a leaf, and leaves come out full."""
+    """SAH cost of testing primitives of total `_weight` n in a leaf: the packed leaf test (`simd.tri4_test`)
+    takes four triangles at the price of one, so the cost counts blocks of four, ceil(n / 4), not primitives
+    (Embree's SAH does the same for its four-wide leaves). With a traversal step costing one block, every node
+    of at most four triangles becomes a leaf, and leaves come out full."""
     return (n + 3) // 4
+
+
+@njit_alloc
+def _weight(p, first_shape):
+    """Primitive p's share of a leaf-test block: a triangle (p < first_shape) a quarter, an analytic shape, tested
+    on its own, a whole block (4), so that the SAH keeps the walls of a room out of one leaf that every ray
+    entering the room would test in full."""
+    return 4 if p >= first_shape else 1
 
 
 @njit_alloc
 def _best_split(bin_box, bin_count, cbox, right_area, acc):
     """Sweep the bins; returns (cost, axis, split bin) minimising A_L·B(N_L) + A_R·B(N_R) (not yet divided by
-    A), B(N) the number of four-primitive blocks the leaf test needs (`_blocks`)."""
+    A), B(N) the number of four-triangle blocks the leaf test needs (`_blocks`; N the primitives' weight)."""
     n_bins = bin_count.shape[1]
     best_cost = np.inf
     best_axis = -1
@@ -170,8 +180,8 @@ def _store_box(node_box, node, box):
 
 
 @njit_alloc
-def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order, bounds, cent, max_leaf, n_bins,
-                cost_traversal, task_size, parallel_min, node_box, node_link, tasks, n_tasks):
+def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order, bounds, cent, first_shape, max_leaf,
+                n_bins, cost_traversal, task_size, parallel_min, node_box, node_link, tasks, n_tasks):
     """Build the subtree of node `root` over order[start:end], allocating nodes from `first_free` upward.
 
     Nodes with fewer than `task_size` primitives (when > 0) are not built but appended to `tasks` as
@@ -210,6 +220,7 @@ def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order,
         axis = -1
         split = 0
         cost = np.inf
+        weight = count
         if count > 1 and depth < MAX_DEPTH:
             for a in range(3):
                 ext = cbox[3 + a] - cbox[a]
@@ -217,14 +228,16 @@ def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order,
             _reset(bin_box)
             bin_count[:] = 0
             if count >= parallel_min:
-                _bin_parallel(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count)
+                _bin_parallel(order, start, end, bounds, cent, cbox, scale, first_shape, bin_box, bin_count)
             else:
-                _bin_range(order, start, end, bounds, cent, cbox, scale, bin_box, bin_count)
+                _bin_range(order, start, end, bounds, cent, cbox, scale, first_shape, bin_box, bin_count)
             cost, axis, split = _best_split(bin_box, bin_count, cbox, right_area, acc)
-        # stage 2: a leaf when splitting does not pay (SAH) or is impossible
+            weight = bin_count[0].sum()
+        # stage 2: a leaf when splitting does not pay (SAH) or is impossible; a leaf holds at most max_leaf
+        # weight, four triangles or one shape: shapes are tested one by one, so each gets a box of its own
         area = _half_area(box)
         split_cost = cost_traversal + (cost / area if area > 0.0 else 0.0)
-        leaf = count == 1 or depth >= MAX_DEPTH or (count <= max_leaf and (axis < 0 or _blocks(count) <= split_cost))
+        leaf = count == 1 or depth >= MAX_DEPTH or (weight <= max_leaf and (axis < 0 or _blocks(weight) <= split_cost))
         if leaf:
             node_link[node, 0] = start
             node_link[node, 1] = count
@@ -259,24 +272,26 @@ def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order,
 
 
 @njit_parallel
-def _build_tasks(tasks, bases, order, bounds, cent, max_leaf, n_bins, cost_traversal, node_box, node_link, ends,
-                 depths):
+def _build_tasks(tasks, bases, order, bounds, cent, first_shape, max_leaf, n_bins, cost_traversal, node_box,
+                 node_link, ends, depths):
     for k in prange(tasks.shape[0]):
         node, start, end, depth = tasks[k, 0], tasks[k, 1], tasks[k, 2], tasks[k, 3]
         box = np.empty(6)
         cbox = np.empty(6)
         _range_bounds(order, start, end, bounds, cent, box, cbox)
         ends[k], _, depths[k] = _build_from(node, start, end, depth, box, cbox, bases[k], order, bounds, cent,
-                                            max_leaf, n_bins, cost_traversal, i64(0), i64(1 << 62), node_box,
-                                            node_link, tasks, i64(0))
+                                            first_shape, max_leaf, n_bins, cost_traversal, i64(0), i64(1 << 62),
+                                            node_box, node_link, tasks, i64(0))
 
 
 @njit_alloc
-def build_bvh(bounds, max_leaf, n_bins, cost_traversal):
-    """Build a BVH over primitive boxes `bounds` float64 (n, 6) (min xyz, max xyz); n >= 1.
+def build_bvh(bounds, first_shape, max_leaf, n_bins, cost_traversal):
+    """Build a BVH over primitive boxes `bounds` float64 (n, 6) (min xyz, max xyz); n >= 1. Primitives from
+    `first_shape` on are analytic shapes, before it triangles (the SAH weighs them apart: `_weight`).
 
     `cost_traversal` is the SAH cost of a traversal step relative to one primitive test; leaves hold at most
-    `max_leaf` primitives (more only where the depth limit forces it).
+    `max_leaf` of primitive weight (`_weight`: triangles, or a single shape; more only where the depth limit
+    forces it).
 
     Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,), depth). Interior nodes link to
     their first child (the second follows it); a leaf's primitives are order[first:first + count].
@@ -297,8 +312,9 @@ def build_bvh(bounds, max_leaf, n_bins, cost_traversal):
     # node 1 is padding: sibling pairs then start at even indices, so a pair of 32-byte nodes fills one cache line
     node_box[1] = 0.0
     top_end, n_tasks, depth = _build_from(i64(0), i64(0), i64(n), i64(0), box, cbox, i64(2), order, bounds, cent,
-                                          max_leaf, n_bins, cost_traversal, i64(task_size if n >= 4 * task_size else 0),
-                                          i64(PARALLEL_MIN), node_box, node_link, tasks, i64(0))
+                                          first_shape, max_leaf, n_bins, cost_traversal,
+                                          i64(task_size if n >= 4 * task_size else 0), i64(PARALLEL_MIN), node_box,
+                                          node_link, tasks, i64(0))
     if n_tasks == 0:
         return node_box[:top_end].copy(), node_link[:top_end].copy(), order, depth
     # the subtrees, in parallel, each into its own region of the node arrays
@@ -314,7 +330,8 @@ def build_bvh(bounds, max_leaf, n_bins, cost_traversal):
     big_link[:top_end] = node_link[:top_end]
     ends = np.empty(n_tasks, np.int64)
     depths = np.empty(n_tasks, np.int64)
-    _build_tasks(tasks, bases, order, bounds, cent, max_leaf, n_bins, cost_traversal, big_box, big_link, ends, depths)
+    _build_tasks(tasks, bases, order, bounds, cent, first_shape, max_leaf, n_bins, cost_traversal, big_box, big_link,
+                 ends, depths)
     # compact: close the gaps between regions, shifting child links that point into a region
     shift = np.zeros(n_tasks, np.int64)
     total = top_end
