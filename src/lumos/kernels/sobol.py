@@ -21,6 +21,9 @@ arithmetic as float, so every constant is a np.uint64).
 """
 
 import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic, overload
 
 from .jit import njit
 from .rng import mix64
@@ -38,18 +41,60 @@ _S8 = np.uint64(8)
 _S11 = np.uint64(11)
 _S16 = np.uint64(16)
 _S23 = np.uint64(23)
+_S24 = np.uint64(24)
 _S27 = np.uint64(27)
 _S32 = np.uint64(32)
 
 
-@njit
 def _reverse_bits(x):
-    """The 32 low bits of x in reverse order."""
+    """The 32 low bits of x in reverse order (LLVM's bitreverse when compiled: a byte swap and three mask-and-shift
+    steps)."""
     x = ((x >> _S1) & np.uint64(0x55555555)) | ((x & np.uint64(0x55555555)) << _S1)
     x = ((x >> _S2) & np.uint64(0x33333333)) | ((x & np.uint64(0x33333333)) << _S2)
     x = ((x >> _S4) & np.uint64(0x0F0F0F0F)) | ((x & np.uint64(0x0F0F0F0F)) << _S4)
     x = ((x >> _S8) & np.uint64(0x00FF00FF)) | ((x & np.uint64(0x00FF00FF)) << _S8)
     return ((x >> _S16) | (x << _S16)) & _U32
+
+
+@overload(_reverse_bits, inline="always")
+def _reverse_bits_jit(x):
+    def impl(x):
+        return _bitreverse32(x)
+
+    return impl
+
+
+@intrinsic
+def _bitreverse32(typingctx, x):
+    sig = types.uint64(types.uint64)
+
+    def codegen(context, builder, signature, args):
+        i32 = ir.IntType(32)
+        fn = builder.module.declare_intrinsic("llvm.bitreverse", [i32], ir.FunctionType(i32, [i32]))
+        return builder.zext(builder.call(fn, [builder.trunc(args[0], i32)]), ir.IntType(64))
+
+    return sig, codegen
+
+
+def _pascal_bytes():
+    """y_rev's byte tables: entry [b, v] is the XOR of the reversed direction numbers r_8b+m of the set bits m of
+    byte v (r_0 = 1, r_k+1 = r_k ^ (r_k << 1), 32 bits), so the second coordinate of index i is four lookups."""
+    r = [1]
+    for _ in range(31):
+        r.append((r[-1] ^ (r[-1] << 1)) & 0xFFFFFFFF)
+    table = np.zeros((4, 256), np.uint64)
+    for b in range(4):
+        for v in range(256):
+            acc = 0
+            for m in range(8):
+                if v >> m & 1:
+                    acc ^= r[8 * b + m]
+            table[b, v] = acc
+    return table
+
+
+_PASCAL = _pascal_bytes()
+_BYTE = np.uint64(0xFF)
 
 
 @njit
@@ -118,6 +163,8 @@ def permute(i, n, p):
         i ^= i >> _S5
         if i < n:
             break
+    if n & (n - _ONE) == np.uint64(0):
+        return (i + p) & (n - _ONE)  # a power of two: the remainder without a division
     return (i + p) % n
 
 
@@ -127,17 +174,12 @@ def sobol_2d(pixel_key, spp, sample, dim):
 
     Worked in reversed-digit form, where an Owen scramble is one Laine–Karras hash: the van der Corput
     coordinate's reversed digits are the index itself, and the second coordinate's reversed direction numbers
-    are r_0 = 1, r_k+1 = r_k ^ (r_k << 1)."""
+    are r_0 = 1, r_k+1 = r_k ^ (r_k << 1), XORed for the set bits of the index by byte tables (`_PASCAL`: four
+    lookups instead of a loop whose branches mispredict on random bits)."""
     h = mix64(pixel_key ^ (np.uint64(dim) * _GOLDEN))
     j = permute(np.uint64(sample), np.uint64(spp), h & _U32)
-    y_rev = np.uint64(0)
-    r = _ONE
-    i = j
-    while i != np.uint64(0):
-        if i & _ONE:
-            y_rev ^= r
-        i >>= _ONE
-        r = (r ^ (r << _ONE)) & _U32
+    y_rev = (_PASCAL[0, j & _BYTE] ^ _PASCAL[1, (j >> _S8) & _BYTE] ^ _PASCAL[2, (j >> _S16) & _BYTE]
+             ^ _PASCAL[3, (j >> _S24) & _BYTE])
     x = _reverse_bits(_laine_karras(j, h >> _S32))
     y = _reverse_bits(_laine_karras(y_rev, ((h * _GOLDEN) >> _S32) & _U32))
     return float(x) * _INV_2_32, float(y) * _INV_2_32
