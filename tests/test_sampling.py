@@ -14,7 +14,7 @@ from naive import chi2_uniform, unit
 
 from lumos.kernels.illumination import sample_light
 from lumos.kernels.views import lighting_of
-from lumos.kernels.sampling import concentric_disk, stratified_2d
+from lumos.kernels.sampling import concentric_disk, stratified_2d, turn
 
 P_MIN = 1e-3  # significance level of every χ² test here (the seeds are fixed, so the outcome is too)
 
@@ -25,6 +25,18 @@ def _disk_bins(x, y, rings=8, sectors=12):
     ring = np.minimum((r2 * rings).astype(int), rings - 1)
     sector = np.minimum(((np.arctan2(y, x) + math.pi) / (2 * math.pi) * sectors).astype(int), sectors - 1)
     return np.bincount(ring * sectors + sector, minlength=rings * sectors)
+
+
+def test_turn_is_the_cosine_and_sine_of_a_whole_turn(rng):
+    """turn(u) replaces math.cos/sin(2πu) in the samplers: it must agree with them everywhere in [0, 1), at the
+    quarter-turn boundaries where it changes quadrant above all, and stay on the unit circle."""
+    u = np.concatenate([np.linspace(0.0, 1.0, 40001)[:-1], rng.random(20000),
+                        [k / 8 + e for k in range(8) for e in (-1e-12, 0.0, 1e-12) if 0.0 <= k / 8 + e < 1.0],
+                        [1.0 - 2.0**-53]])
+    got = np.array([turn(x) for x in u])
+    want = np.stack([np.cos(2 * np.pi * u), np.sin(2 * np.pi * u)], axis=1)
+    assert np.abs(got - want).max() < 3e-14
+    assert np.abs(np.hypot(got[:, 0], got[:, 1]) - 1.0).max() < 3e-14
 
 
 def test_concentric_disk_is_uniform(rng):

@@ -18,11 +18,11 @@ All vectors are unit tuples; `n` is the shading normal on the side of wo (wo·n 
 import math
 
 from .jit import njit, njit_inline
+from .sampling import turn
 from .vec import dot, madd, mul, orthonormal_basis
 
 _INV_PI = 1.0 / math.pi
 _INV_2PI = 0.5 / math.pi
-_TWO_PI = 2.0 * math.pi
 
 
 @njit_inline
@@ -84,9 +84,9 @@ def sample_cosine(n, u1, u2):
     """A cosine-weighted direction about unit n (Malley's method: a uniform disk point lifted to the
     hemisphere); its pdf is cosθ/π."""
     r = math.sqrt(u1)
-    phi = _TWO_PI * u2
-    x = r * math.cos(phi)
-    y = r * math.sin(phi)
+    c, s = turn(u2)
+    x = r * c
+    y = r * s
     z = math.sqrt(max(0.0, 1.0 - u1))
     t, b = orthonormal_basis(n)
     return (x * t[0] + y * b[0] + z * n[0], x * t[1] + y * b[1] + z * n[1], x * t[2] + y * b[2] + z * n[2])
@@ -97,9 +97,9 @@ def sample_phong(axis, exponent, u1, u2):
     """A direction about unit `axis` with density (n+1)/(2π)·cosⁿα (α from the axis): cos α = u1^(1/(n+1))."""
     cos_a = u1 ** (1.0 / (exponent + 1.0))
     sin_a = math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
-    phi = _TWO_PI * u2
-    x = sin_a * math.cos(phi)
-    y = sin_a * math.sin(phi)
+    c, s = turn(u2)
+    x = sin_a * c
+    y = sin_a * s
     t, b = orthonormal_basis(axis)
     return (x * t[0] + y * b[0] + cos_a * axis[0], x * t[1] + y * b[1] + cos_a * axis[1],
             x * t[2] + y * b[2] + cos_a * axis[2])

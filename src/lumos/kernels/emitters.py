@@ -45,7 +45,7 @@ from .layout import (
     SHAPE_RECT,
     SHAPE_SPHERE,
 )
-from .sampling import concentric_disk
+from .sampling import concentric_disk, turn
 from .vec import cross, dot, length, mul, normalize, row3, sub, xform_normal, xform_point
 
 _NO_SAMPLE = ((0.0, 0.0, 1.0), 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0, False)
@@ -75,8 +75,8 @@ def _canonical_point(kind, part, u1, u2):
     if kind == SHAPE_SPHERE:
         z = 1.0 - 2.0 * u1
         r = math.sqrt(max(0.0, 1.0 - z * z))
-        phi = 2.0 * math.pi * u2
-        q = (r * math.cos(phi), r * math.sin(phi), z)
+        cp, sp = turn(u2)
+        q = (r * cp, r * sp, z)
         return q, q
     if kind == SHAPE_BOX:
         axis = part // 2
@@ -88,8 +88,7 @@ def _canonical_point(kind, part, u1, u2):
             return (u1, c, u2), (0.0, s, 0.0)
         return (u1, u2, c), (0.0, 0.0, s)
     if (kind == SHAPE_CYLINDER or kind == SHAPE_CONE) and part == 0:
-        phi = 2.0 * math.pi * u2
-        cp, sp = math.cos(phi), math.sin(phi)
+        cp, sp = turn(u2)
         if kind == SHAPE_CYLINDER:
             return (cp, sp, u1), (cp, sp, 0.0)
         rho = math.sqrt(u1)  # the cone's area element grows with the radius ρ = 1 − z

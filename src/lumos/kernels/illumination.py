@@ -54,7 +54,7 @@ from .layout import (
     SHAPE_SPHERE,
 )
 from .rng import rand01
-from .sampling import concentric_disk, stratified_2d
+from .sampling import concentric_disk, stratified_2d, turn
 from .surface import offset_origin, surface_at
 from .texture import is_hole
 from .traverse import SHADOW_CUTOFF, closest_hit, transmittance
@@ -153,9 +153,9 @@ def sphere_cone(center, r, p, u1, u2):
     cos_max = math.sqrt(max(0.0, 1.0 - sin2_max))
     cos_t = 1.0 - u1 * (1.0 - cos_max)
     sin_t = math.sqrt(max(0.0, 1.0 - cos_t * cos_t))
-    phi = 2.0 * math.pi * u2
+    cp, sp = turn(u2)
     t1, t2 = orthonormal_basis(axis)
-    L = normalize(madd(madd(mul(axis, cos_t), t1, sin_t * math.cos(phi)), t2, sin_t * math.sin(phi)))
+    L = normalize(madd(madd(mul(axis, cos_t), t1, sin_t * cp), t2, sin_t * sp))
     # distance to the near surface of the sphere along L
     b = dot(to, L)
     disc = b * b - (dc * dc - r * r)

@@ -24,7 +24,7 @@ from .optics import reflect, refract, schlick
 from .jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from .layout import LIGHT_DIRECTIONAL, LV_DIFFUSE
 from .rng import rand2_key, rand_key, sample_key
-from .sampling import stratified_2d
+from .sampling import stratified_2d, turn
 from .surface import offset_origin
 from .traverse import any_hit, closest_hit
 from .views import geometry_of, lighting_of
@@ -203,9 +203,9 @@ def ff_rows_raycast(sa, recv, src, recv_patch, rows, samples, seed, out, rays_ou
 @njit
 def _cosine_dir(n, u1, u2):
     r = math.sqrt(u1)
-    phi = 2.0 * math.pi * u2
-    x = r * math.cos(phi)
-    y = r * math.sin(phi)
+    cp, sp = turn(u2)
+    x = r * cp
+    y = r * sp
     z = math.sqrt(max(0.0, 1.0 - u1))
     s = 1.0 if n[2] >= 0.0 else -1.0
     a = -1.0 / (s + n[2])
