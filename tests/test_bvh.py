@@ -157,6 +157,8 @@ def check_tree(compiled, prim_boxes):
             lo, hi = first[node], first[node] + count[node]
             assert 0 <= lo and hi <= n_prims
             seen_slots[lo:hi] += 1
+            if (arrays.prim_ref[lo:hi] < 0).any():  # shapes are tested one by one: each has a leaf of its own
+                assert count[node] == 1, (node, arrays.prim_ref[lo:hi])
             for r in arrays.prim_ref[lo:hi]:
                 pb = prim_boxes[int(r)]
                 assert (boxes[node, :3] <= pb[:3]).all() and (pb[3:] <= boxes[node, 3:]).all(), (node, r)
@@ -271,6 +273,25 @@ def test_tree_invariants_mixed_scene(mixed):
     check_packed_leaves(compiled.arrays, compiled.triangle_faces)
     # each wide node takes up to WIDE - 1 binary interior nodes: about log2(WIDE) binary levels per wide level
     assert len(compiled.arrays.wide_nodes) < len(compiled.arrays.node_box) / (0.6 * L.WIDE)
+
+
+def test_a_room_of_shapes_gives_each_wall_its_own_box():
+    """Mitsuba's Cornell box is eight shapes (five walls, the light, two blocks): the eight fill the 8-wide root,
+    one per slot. (When the SAH priced shapes as packed triangles, four went into one leaf whose box was the
+    whole room, and every ray in the room tested all four.)"""
+    from pathlib import Path
+
+    import lumos
+    from lumos.compile import compile_scene
+
+    scene = lumos.load_scene(Path(__file__).parent.parent / "examples" / "path" / "cornell.yaml")
+    arrays = compile_scene(scene).arrays
+    link = np.asarray(arrays.wide_link)
+    counts = link[:, L.WIDE_COUNT:L.WIDE_COUNT + L.WIDE]
+    assert len(arrays.prim_ref) == 8
+    assert sorted(counts[counts > 0]) == [1] * 8  # eight leaf slots of one primitive each
+    if L.WIDE >= 8:
+        assert len(link) == 1
 
 
 def test_packed_triangle_test_vector_code_equals_scalar_twin(rng):
