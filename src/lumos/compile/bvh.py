@@ -11,8 +11,8 @@ from .memory import aligned_copy, aligned_zeros
 
 def build(prim_bounds: np.ndarray, first_shape: int | None = None):
     """BVH over boxes float64 (n, 6): triangles, then (from `first_shape` on; default: none) analytic shapes,
-    which the SAH weighs as four triangles' test each (`kernels.bvh_build._weight`). Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,),
-    depth). An empty scene gives an empty tree."""
+    which the SAH weighs as four triangles' test each (`kernels.bvh_build._weight`). Returns (node_box float32
+    (nn, 6), node_link int32 (nn, 2), order int64 (n,), depth). An empty scene gives an empty tree."""
     if len(prim_bounds) == 0:
         return np.zeros((0, 6), np.float32), np.zeros((0, 2), np.int32), np.zeros(0, np.int64), 0
     bounds = np.ascontiguousarray(prim_bounds, dtype=np.float64)
