@@ -187,6 +187,20 @@ def test_same_image_for_any_thread_count_and_pass_split(monkeypatch):
     assert not np.array_equal(one.array, other_seed.array)
 
 
+def test_image_is_the_same_whatever_aovs_are_asked_for():
+    """The kernel stores squares, guides and the direct light only for the AOVs that read them: the image and the
+    AOVs asked for are those of a render that keeps everything."""
+    settings = dict(width=20, height=14, spp=6, seed=5)
+    plain = path(SMALL_BOX, **settings)
+    every = path(SMALL_BOX, aov=["variance", "albedo", "normal", "direct", "indirect"], **settings)
+    np.testing.assert_array_equal(plain.array, every.array)
+    assert every.aovs["variance"].max() > 0.0 and every.aovs["direct"].max() > 0.0
+    assert np.abs(every.aovs["albedo"]).max() > 0.0 and np.abs(every.aovs["normal"]).max() > 0.0
+    for name in ("variance", "direct"):
+        alone = path(SMALL_BOX, aov=[name], **settings)
+        np.testing.assert_array_equal(alone.aovs[name], every.aovs[name])
+
+
 def test_variance_aov_is_the_variance_of_the_mean():
     """Across renders with other seeds, the pixels' spread matches the variance AOV on average with independent
     samples, and stays below it with the stratified Sobol points (the AOV is then an upper bound)."""

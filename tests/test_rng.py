@@ -77,3 +77,13 @@ def test_no_collisions_between_components():
     # swapping which component carries a value must give another number (no symmetric mixing)
     seen = {rand01(1, 2, 3, 4), rand01(1, 3, 2, 4), rand01(1, 4, 3, 2), rand01(2, 1, 3, 4), rand01(1, 2, 4, 3)}
     assert len(seen) == 5
+
+
+@pytest.mark.nojit
+@pytest.mark.parametrize("key", KEYS)
+def test_pixel_hash_then_sample_key_is_sample_key(key):
+    """The path tracer hashes (seed, pixel) once per pixel: the key it then makes per sample is `sample_key`'s."""
+    from lumos.kernels.rng import pixel_hash, pixel_sample_key, sample_key
+
+    seed, pixel, sample, _ = key
+    assert pixel_sample_key(np.uint64(pixel_hash(seed, pixel)), sample) == sample_key(seed, pixel, sample)

@@ -40,9 +40,20 @@ def rand01(seed, pixel, sample, dim):
 def sample_key(seed, pixel, sample):
     """The hash of (seed, pixel, sample) that `rand01` starts from: `rand_key(sample_key(s, p, i), d)` equals
     `rand01(s, p, i, d)`, at a quarter of the cost when one sample draws many dimensions (a path tracer)."""
-    h = mix64(np.uint64(seed))
-    h = mix64(h ^ np.uint64(pixel))
-    return mix64(h ^ np.uint64(sample))
+    return pixel_sample_key(pixel_hash(seed, pixel), sample)
+
+
+@njit
+def pixel_hash(seed, pixel):
+    """The part of `sample_key` that one pixel's samples share: hash it once per pixel, then
+    `pixel_sample_key(pixel_hash(seed, pixel), sample)` is `sample_key(seed, pixel, sample)` for one hash a sample."""
+    return mix64(mix64(np.uint64(seed)) ^ np.uint64(pixel))
+
+
+@njit
+def pixel_sample_key(pixel_h, sample):
+    """`sample_key` from the pixel's `pixel_hash`."""
+    return mix64(np.uint64(pixel_h) ^ np.uint64(sample))
 
 
 @njit

@@ -170,13 +170,26 @@ def permute(i, n, p):
 
 @njit
 def sobol_2d(pixel_key, spp, sample, dim):
-    """Point `sample` of the pixel's `spp` points for dimension pair `dim`: (u, v) in [0, 1)².
+    """Point `sample` of the pixel's `spp` points for dimension pair `dim`: (u, v) in [0, 1)²; the same as
+    `sobol_2d_seeded(pair_seed(pixel_key, dim), spp, sample)`, whose seed a renderer hashes once per pixel."""
+    return sobol_2d_seeded(pair_seed(pixel_key, dim), spp, sample)
+
+
+@njit
+def pair_seed(pixel_key, dim):
+    """The seed of dimension pair `dim`'s shuffle and scrambles in the pixel whose key is `pixel_key`."""
+    return mix64(pixel_key ^ (np.uint64(dim) * _GOLDEN))
+
+
+@njit
+def sobol_2d_seeded(h, spp, sample):
+    """Point `sample` of `spp` for the pair seed h (`pair_seed`).
 
     Worked in reversed-digit form, where an Owen scramble is one Laine–Karras hash: the van der Corput
     coordinate's reversed digits are the index itself, and the second coordinate's reversed direction numbers
     are r_0 = 1, r_k+1 = r_k ^ (r_k << 1), XORed for the set bits of the index by byte tables (`_PASCAL`: four
     lookups instead of a loop whose branches mispredict on random bits)."""
-    h = mix64(pixel_key ^ (np.uint64(dim) * _GOLDEN))
+    h = np.uint64(h)
     j = permute(np.uint64(sample), np.uint64(spp), h & _U32)
     y_rev = (_PASCAL[0, j & _BYTE] ^ _PASCAL[1, (j >> _S8) & _BYTE] ^ _PASCAL[2, (j >> _S16) & _BYTE]
              ^ _PASCAL[3, (j >> _S24) & _BYTE])

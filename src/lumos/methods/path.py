@@ -49,8 +49,8 @@ from ..kernels.emitters import emitter_pdf, sample_emitter
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from ..kernels.layout import CAM_APERTURE, LIGHT_SPHERE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS
-from ..kernels.rng import rand2_key, rand_key, sample_key
-from ..kernels.sobol import sobol_2d
+from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
+from ..kernels.sobol import pair_seed, sobol_2d_seeded
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
@@ -80,6 +80,9 @@ FILTER_BOX, FILTER_GAUSSIAN, FILTER_CENTRE = 0, 1, 2
 #: The Gaussian pixel filter: standard deviation and radius in pixels (Mitsuba's `gaussian`).
 GAUSSIAN_SIGMA = 0.5
 GAUSSIAN_RADIUS = 2.0
+#: What `_pass_rows` accumulates besides the radiance: squares (the variance AOV), the denoiser's guides (albedo,
+#: normal, the light seen directly) and the direct light (the direct and indirect AOVs).
+KEEP_SQUARES, KEEP_GUIDES, KEEP_DIRECT = 1, 2, 4
 #: Seconds a pass should take once the first pass has shown the speed (progress, --time-limit, Ctrl-C).
 PASS_SECONDS = 1.0
 
@@ -153,11 +156,10 @@ def _media_update(media_obj, media_ior, n_media, obj, ior, entering):
 
 
 @njit_inline
-def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pixel_key, spp, sample, key, scratch,
-               background):
+def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, points, key, scratch, background):
     """Radiance along the camera ray (o, d) at shutter time `time`: one path, in the order of the maths.
 
-    Random numbers: `_draw2(sampler, pixel_key, spp, sample, key, pair, dim)` (see there). Returns (rgb, rays
+    Random numbers: `_draw2(sampler, points, key, pair, dim)` (see there). Returns (rgb, rays
     traced, t and object id of the first hit (t = −1 on a miss), albedo and shading normal of the first hit (the
     denoiser's guides), the emission of the first hit itself (the light seen directly, which the denoiser
     leaves alone), and the direct light: the part of rgb that `max_depth: 0` gathers — the emission (and
@@ -236,10 +238,15 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
         exponent = mat[MAT_SHININESS]
         dim = DIM_PATH + depth * DIM_VERTEX
         pair = PAIR_PATH + depth * PAIRS_VERTEX
-        u_lobe, u_pick = _draw2(sampler, pixel_key, spp, sample, key, pair, dim)
+        # one pair picks the lobe and the emitter; with a single lobe that is not glass (whose pair also decides
+        # between reflection and refraction) and a single emitter it decides nothing, and is not drawn
+        u_lobe = u_pick = 0.0
+        lobes = (p_d > 0.0) + (p_s > 0.0) + (p_r > 0.0)
+        if p_t > 0.0 or lobes > 1 or em.emit_cdf.shape[0] > 1:
+            u_lobe, u_pick = _draw2(sampler, points, key, pair, dim)
         # stage 4: next-event estimation (the smooth lobes only: a mirror or glass cannot meet a light sample)
         if p_d + p_s > 0.0:
-            ul1, ul2 = _draw2(sampler, pixel_key, spp, sample, key, pair + 2, dim + 4)
+            ul1, ul2 = _draw2(sampler, points, key, pair + 2, dim + 4)
             wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, u_pick, ul1, ul2, time)
             if pdf_light > 0.0 and (delta or mode != MODE_BSDF):
                 cos_i = n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]
@@ -260,7 +267,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
                             if depth == 0:
                                 D0, D1, D2 = D0 + c0 * w, D1 + c1 * w, D2 + c2 * w
         # stage 5: BSDF sampling: the direction the path goes on in, and its weight f·cos/pdf
-        u1, u2 = _draw2(sampler, pixel_key, spp, sample, key, pair + 1, dim + 2)
+        u1, u2 = _draw2(sampler, points, key, pair + 1, dim + 2)
         p_smooth = p_d + p_s
         if u_lobe < p_smooth:
             wi, (w0, w1, w2), pdf = sample_smooth(kd, ks, exponent, p_d, p_s, n_s, wo, u_lobe, u1, u2)
@@ -311,14 +318,26 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, pi
 
 
 @njit_inline
-def _draw2(sampler, pixel_key, spp, sample, key, pair, dim):
+def _draw2(sampler, points, key, pair, dim):
     """Two random numbers for a pair of dimensions of a sample: padded Owen-scrambled Sobol points
-    (`kernels.sobol`) for the pairs that matter most (the pixel, the lens, the first two vertices: lobe choice
-    and light pick, BSDF direction, point on a light), independent ones (dimensions dim, dim + 1 of the sample's
-    hash `key`, from one hash) for the rest or with `sampler: independent`."""
+    (`kernels.sobol`) for the pairs that matter most (the pixel, the lens, and the first vertex's lobe choice
+    and light pick, BSDF direction and point on a light), read from the sample's `points` (`_sobol_points`);
+    independent ones (dimensions dim, dim + 1 of the sample's hash `key`, from one hash) for the rest or with
+    `sampler: independent`."""
     if sampler == SAMPLER_SOBOL and pair < SOBOL_PAIRS:
-        return sobol_2d(pixel_key, spp, sample, pair)
+        return points[2 * pair], points[2 * pair + 1]
     return rand2_key(key, dim)
+
+
+@njit_inline
+def _sobol_points(seeds, spp, sample, points):
+    """The Sobol points of every pair of one sample, into points (2·SOBOL_PAIRS): drawn together before the path
+    starts, their hash chains are independent of one another and of the path, so the processor runs them side
+    by side (drawn one by one as the path needs them, each waited for its own chain)."""
+    for k in range(SOBOL_PAIRS):
+        u, v = sobol_2d_seeded(seeds[k], spp, sample)
+        points[2 * k] = u
+        points[2 * k + 1] = v
 
 
 @njit
@@ -335,32 +354,40 @@ def _pixel_point(filter_kind, u1, u2, x, y):
 
 @njit_parallel
 def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, spp, seed, max_depth, mode,
-               sampler, filter_kind, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row):
+               sampler, filter_kind, keep, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row):
     """Samples s0 … s1−1 of every pixel of rows y0 … y1−1, added (in sample order) to the float64 buffers:
-    sums and sums2 (H, W, 3) of radiance and its square, guides (H, W, 12) of albedo, normal, the first hit's
-    own emission and the direct light; depth and
-    object_id from sample 0."""
+    sums (H, W, 3) of radiance; where `keep` says so (`KEEP_*` bits: only what the asked-for AOVs and the
+    denoiser read is stored, a third of the stores per sample otherwise), sums2 (H, W, 3) of its square and
+    guides (H, W, 12) of albedo, normal, the first hit's own emission and the direct light; depth and object_id
+    from sample 0."""
     for y in prange(y0, y1):
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch()
+        seeds = np.empty(SOBOL_PAIRS, np.uint64)  # the pixel's Sobol pair seeds (`sobol.pair_seed`)
+        points = np.empty(2 * SOBOL_PAIRS)  # the sample's Sobol points, pair by pair
         rays = 0
         bad = 0
         for x in range(width):
             pixel = y * width + x
-            pixel_key = sample_key(seed, pixel, np.int64(1) << 62)  # the pixel's own hash (no sample is 2^62)
+            pixel_h = pixel_hash(seed, pixel)
+            pixel_key = pixel_sample_key(pixel_h, np.int64(1) << 62)  # the pixel's own hash (no sample is 2^62)
+            for k in range(SOBOL_PAIRS):
+                seeds[k] = pair_seed(pixel_key, k)
             for s in range(s0, s1):
-                key = sample_key(seed, pixel, s)
-                u1, u2 = _draw2(sampler, pixel_key, spp, s, key, 0, 0)
+                key = pixel_sample_key(pixel_h, s)  # = rng.sample_key(seed, pixel, s)
+                if sampler == SAMPLER_SOBOL:
+                    _sobol_points(seeds, spp, s, points)
+                u1, u2 = _draw2(sampler, points, key, 0, 0)
                 fx, fy = _pixel_point(filter_kind, u1, u2, x, y)
                 lx, ly = 0.5, 0.5
                 if cam_params[CAM_APERTURE] != 0.0:
-                    lx, ly = _draw2(sampler, pixel_key, spp, s, key, 1, 2)
+                    lx, ly = _draw2(sampler, points, key, 1, 2)
                 o, dr = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
                 tau = cam_time[0]
                 if cam_time[1] > cam_time[0]:
                     tau = cam_time[0] + (cam_time[1] - cam_time[0]) * rand_key(key, DIM_TIME)
-                rgb, n, t, obj, alb, nrm, emits, direct = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth, mode, sampler,
-                                                      pixel_key, spp, s, key, scratch, sa.background)
+                rgb, n, t, obj, alb, nrm, emits, direct = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth,
+                                                                     mode, sampler, points, key, scratch, sa.background)
                 rays += n
                 r, g, b = rgb
                 if not (math.isfinite(r) and math.isfinite(g) and math.isfinite(b)):
@@ -370,17 +397,20 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
                 sums[y, x, 0] += r
                 sums[y, x, 1] += g
                 sums[y, x, 2] += b
-                sums2[y, x, 0] += r * r
-                sums2[y, x, 1] += g * g
-                sums2[y, x, 2] += b * b
-                for c in range(3):
-                    guides[y, x, c] += alb[c]
-                    guides[y, x, 3 + c] += nrm[c]
-                if math.isfinite(emits[0] + emits[1] + emits[2]):
+                if keep & KEEP_SQUARES:
+                    sums2[y, x, 0] += r * r
+                    sums2[y, x, 1] += g * g
+                    sums2[y, x, 2] += b * b
+                if keep & KEEP_GUIDES:
                     for c in range(3):
-                        guides[y, x, 6 + c] += emits[c]
-                for c in range(3):
-                    guides[y, x, 9 + c] += direct[c]
+                        guides[y, x, c] += alb[c]
+                        guides[y, x, 3 + c] += nrm[c]
+                    if math.isfinite(emits[0] + emits[1] + emits[2]):
+                        for c in range(3):
+                            guides[y, x, 6 + c] += emits[c]
+                if keep & KEEP_DIRECT:
+                    for c in range(3):
+                        guides[y, x, 9 + c] += direct[c]
                 if s == 0 and t >= 0.0:
                     depth[y, x] = t
                     object_id[y, x] = obj
@@ -430,6 +460,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
     filter_kind = np.int64(FILTER_CENTRE if settings.antialias == "none" else
                            FILTER_GAUSSIAN if settings.filter == "gaussian" else FILTER_BOX)
     seed = np.int64(settings.seed)
+    keep = np.int64(_keep(settings))
     sums = np.zeros((height, width, 3))
     sums2 = np.zeros((height, width, 3))
     guides = np.zeros((height, width, 12))
@@ -454,7 +485,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
             for y0, y1 in bands:
                 _pass_rows(sa, em, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
                            np.int64(y1), np.int64(done), np.int64(done + n), np.int64(spp), seed, max_depth, mode,
-                           sampler, filter_kind, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row)
+                           sampler, filter_kind, keep, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row)
                 if progress is not None:
                     fraction = (done + n * y1 / height) / spp
                     if settings.time_limit is not None:
@@ -472,6 +503,17 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
             if on_pass is not None:
                 on_pass(film())
     return film(final=True)
+
+
+def _keep(settings) -> int:
+    """The `KEEP_*` bits the asked-for AOVs and the denoiser need."""
+    aov = set(settings.aov)
+    keep = KEEP_SQUARES if "variance" in aov else 0
+    if settings.denoise or aov & {"albedo", "normal"}:
+        keep |= KEEP_GUIDES
+    if aov & {"direct", "indirect"}:
+        keep |= KEEP_DIRECT
+    return keep
 
 
 def _film(sums, sums2, guides, depth, object_id, n, settings, threads, rays_per_row, bad_per_row, passes, stopped,
