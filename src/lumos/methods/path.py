@@ -239,7 +239,8 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         dim = DIM_PATH + depth * DIM_VERTEX
         pair = PAIR_PATH + depth * PAIRS_VERTEX
         # one pair picks the lobe and the emitter; with a single lobe that is not glass (whose pair also decides
-        # between reflection and refraction) and a single emitter it decides nothing, and is not drawn
+        # between reflection and refraction) and a single emitter it decides nothing, and is not read (the
+        # first vertex's Sobol pair is in the sample's batch all the same; a later vertex's hash is saved)
         u_lobe = u_pick = 0.0
         lobes = (p_d > 0.0) + (p_s > 0.0) + (p_r > 0.0)
         if p_t > 0.0 or lobes > 1 or em.emit_cdf.shape[0] > 1:
