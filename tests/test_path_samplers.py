@@ -182,6 +182,18 @@ def test_dielectric_refracts_by_snell():
     assert wi[0] < 0.0  # on the other side of the normal from wo
 
 
+@pytest.mark.parametrize("a, b", [(1.0, 0.0), (0.3, 2.5), (4.0, 4.0), (1e-300, 2.0), (7.0, 1e-300), (1e150, 3e150)])
+def test_power_heuristic_over_is_the_weight_over_the_pdf(a, b):
+    """The light sample's MIS factor in one division: the power heuristic divided by its own pdf, a / (a² + b²),
+    against the exact rational value (where a² underflows it is still right, as the heuristic then is not)."""
+    from fractions import Fraction
+
+    exact = float(Fraction(a) / (Fraction(a) ** 2 + Fraction(b) ** 2))
+    assert bsdf.power_heuristic_over(a, b) == pytest.approx(exact, rel=1e-15, abs=0.0)
+    if a * a + b * b > 1e-290:
+        assert bsdf.power_heuristic_over(a, b) == pytest.approx(bsdf.power_heuristic(a, b) / a, rel=1e-15)
+
+
 # -------------------------------------------------------------------------------------------------- emitters
 
 

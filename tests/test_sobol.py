@@ -1,11 +1,12 @@
 """`kernels.sobol`: the padded Owen-scrambled Sobol points are a (0, m, 2)-net per pixel and pair, the shuffle is a
-permutation of any length, and the per-pixel pair seeds give the same points as drawing them whole."""
+permutation of any length, the second coordinate's superset transform is the Sobol matrix product, and the
+per-pixel pair seeds and the batched block give the same points as drawing them whole, one by one."""
 
 import numpy as np
 import pytest
 
 from lumos.kernels.rng import sample_key
-from lumos.kernels.sobol import pair_seed, permute, sobol_2d, sobol_2d_seeded
+from lumos.kernels.sobol import _pascal_reversed, pair_seed, permute, shuffle, sobol_2d, sobol_2d_seeded, sobol_block
 
 
 def _points(pixel_key, spp, pair):
@@ -31,11 +32,41 @@ def test_pairs_of_one_pixel_are_shuffled_apart():
     assert not np.array_equal(np.sort(a[:, 0]), np.sort(b[:, 0]))  # and scrambled apart
 
 
-@pytest.mark.parametrize("n", [1, 5, 16, 100])
-def test_shuffle_is_a_permutation_of_any_length(n):
-    for p in (0, 12345, 0xFFFFFFFF):
-        got = sorted(int(permute(np.uint64(i), np.uint64(n), np.uint64(p))) for i in range(n))
-        assert got == list(range(n))
+@pytest.mark.parametrize("n", [1, 2, 5, 16, 64, 100])
+@pytest.mark.parametrize("fn", [permute, shuffle])
+def test_shuffle_is_a_permutation_of_any_length(n, fn):
+    orders = set()
+    for p in (0, 12345, 0xFFFFFFFF, 0x9E3779B9):
+        order = [int(fn(np.uint64(i), np.uint64(n), np.uint64(p))) for i in range(n)]
+        assert sorted(order) == list(range(n))
+        orders.add(tuple(order))
+    assert n < 5 or len(orders) == 4  # and each seed picks its own
+
+
+def test_pascal_reversed_is_the_sobol_matrix_product():
+    """The superset transform equals the XOR of the reversed direction numbers r_k (r_0 = 1, r_k+1 = r_k ^
+    (r_k << 1)) over the set bits k of the index: the second Sobol coordinate, digits reversed."""
+    r = [1]
+    for _ in range(31):
+        r.append((r[-1] ^ (r[-1] << 1)) & 0xFFFFFFFF)
+    rng = np.random.default_rng(7)
+    for j in list(range(300)) + [int(x) for x in rng.integers(0, 2**32, 300)] + [2**32 - 1]:
+        want = 0
+        for k in range(32):
+            if j >> k & 1:
+                want ^= r[k]
+        assert int(_pascal_reversed(np.uint64(j))) == want, j
+
+
+@pytest.mark.parametrize("spp, s0, count", [(64, 0, 64), (64, 10, 30), (100, 0, 64), (7, 3, 4), (1, 0, 1)])
+def test_block_is_the_points_one_by_one(spp, s0, count):
+    seeds = np.array([pair_seed(np.uint64(int(sample_key(2, 31, 1 << 62))), k) for k in range(5)], np.uint64)
+    points = np.full((10, 64), np.nan)
+    sobol_block(seeds, spp, s0, count, points)
+    for k in range(5):
+        for i in range(count):
+            assert (points[2 * k, i], points[2 * k + 1, i]) == sobol_2d_seeded(seeds[k], spp, s0 + i)
+    assert np.isnan(points[:, count:]).all()
 
 
 def test_seeded_points_are_the_pixels_points():

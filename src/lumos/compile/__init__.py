@@ -307,6 +307,13 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
     shape_info = np.array(shapes.infos, dtype=np.int32).reshape(-1, L.SHAPE_INFO_SIZE)
     shape_xform = np.array(shapes.xforms, dtype=np.float64).reshape(-1, 4, 4)
+    # as vec.normalize computes it (the same sum, the same division), so a face normal scaled by it is bit for bit
+    # the normalised one (a shape too small to matter overflows its square to inf, and scales by 0 as normalize's
+    # 1/inf does)
+    rows = shape_xform[:, :3, :3]
+    with np.errstate(over="ignore", invalid="ignore"):
+        norms = np.sqrt(rows[:, :, 0] * rows[:, :, 0] + rows[:, :, 1] * rows[:, :, 1] + rows[:, :, 2] * rows[:, :, 2])
+        shape_nscale = np.divide(1.0, norms, out=np.zeros_like(norms), where=norms > 0.0)
     # the triangles of mesh solids inside csg objects follow the BVH's (kernels.csg tests them, not the BVH)
     solid_tris = _concat_triangles(getattr(shapes, "solid_triangles", []))
     shape_info[shape_info[:, L.INFO_KIND] == L.SHAPE_MESH_SOLID, L.INFO_REF] += n_tri
@@ -354,6 +361,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
         tri_info=all_tri_info,
         shape_xform=shape_xform,
         shape_info=shape_info,
+        shape_nscale=shape_nscale,
         prim_ref=prim_ref,
         node_box=node_box,
         node_link=node_link,

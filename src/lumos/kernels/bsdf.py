@@ -28,11 +28,12 @@ _INV_2PI = 0.5 / math.pi
 @njit_inline
 def lobe_probs(kd, ks, kr, kt):
     """Probabilities (p_d, p_s, p_r, p_t) of sampling the diffuse, Phong, mirror and dielectric lobes: each
-    proportional to the mean of its RGB coefficient; all 0 for a black material."""
-    wd = (kd[0] + kd[1] + kd[2]) / 3.0
-    ws = (ks[0] + ks[1] + ks[2]) / 3.0
-    wr = (kr[0] + kr[1] + kr[2]) / 3.0
-    wt = (kt[0] + kt[1] + kt[2]) / 3.0
+    proportional to the mean of its RGB coefficient (to its sum: the thirds cancel, and one division is left of
+    five); all 0 for a black material."""
+    wd = kd[0] + kd[1] + kd[2]
+    ws = ks[0] + ks[1] + ks[2]
+    wr = kr[0] + kr[1] + kr[2]
+    wt = kt[0] + kt[1] + kt[2]
     total = wd + ws + wr + wt
     if not total > 0.0:
         return 0.0, 0.0, 0.0, 0.0
@@ -156,6 +157,16 @@ def sample_dielectric(wo, n, eta, u):
     if u < F:
         return mirror(wo, n), False, F
     return refracted(wo, n, eta, cos_o, cos_t), True, F
+
+
+@njit
+def power_heuristic_over(pdf_a, pdf_b):
+    """`power_heuristic(pdf_a, pdf_b) / pdf_a`, the factor a sample of strategy a is weighted by, in one division:
+    pdf_a / (pdf_a² + pdf_b²); 0 when both squares vanish, as the heuristic is. pdf_a > 0."""
+    s = pdf_a * pdf_a + pdf_b * pdf_b
+    if not s > 0.0:
+        return 0.0
+    return pdf_a / s
 
 
 @njit

@@ -104,11 +104,12 @@ def sample_light(lit, j, p, u1, u2):
         dist = length(to)
         if dist == 0.0:
             return (0.0, 0.0, 1.0), 0.0, 0.0
-        L = mul(to, 1.0 / dist)
+        inv = 1.0 / dist
+        L = mul(to, inv)
         cos_light = -dot(row3(vecs, LV_DIRECTION), L)  # one-sided: emits along its normal only
         if cos_light <= 0.0:
             return L, dist, 0.0
-        return L, dist, cos_light * sc[LS_AREA] * _INV_PI / (dist * dist)
+        return L, dist, cos_light * sc[LS_AREA] * _INV_PI * (inv * inv)
     # sphere light: uniform directions in the cone it subtends from p
     L, dist, solid_angle = sphere_cone(row3(vecs, LV_POSITION), sc[LS_RADIUS], p, u1, u2)
     return L, dist, solid_angle * _INV_PI

@@ -131,6 +131,8 @@ SceneArrays = namedtuple(
         "shape_xform",  # float64 (ns, 4, 4): rows 0-2 object_from_world; row 3 the motion (velocity, world) and
         # in column 3 a 1.0 when the shape moves (its object space at time τ is object_from_world(p − τ·motion))
         "shape_info",  # int32 (ns, SHAPE_INFO_SIZE): see INFO_*
+        "shape_nscale",  # float64 (ns, 3): 1/|row a of object_from_world's linear part|, which turns the world
+        # normal of a canonical face whose normal is ±axis a (box faces, rects, disks, planes, caps) into a unit one
         "prim_ref",  # int32 (np,): BVH leaf order -> triangle (>= 0) or ~shape (< 0)
         "node_box",  # float32 (nn, 8): min xyz, max xyz in columns 0-5 (columns 6-7 hold the link bits)
         "node_link",  # int32 (nn, 8): an int32 view of node_box; columns NODE_FIRST, NODE_COUNT
@@ -166,7 +168,8 @@ Geometry = namedtuple(
      "wide_nodes", "wide_link", "leaf_tris", "leaf_link"],
 )
 #: What turns a hit into a surface (surface_at).
-Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_info", "shape_xform", "shape_info"])
+Surfaces = namedtuple("Surfaces", ["tri_verts", "tri_normals", "tri_uvs", "tri_info", "shape_xform", "shape_info",
+                                   "shape_nscale"])
 #: What the illumination model reads (illuminate, sample_light); tex_info and tex_pixels for the opacity
 #: cut-outs that shadow rays pass through (`kernels.cutout`: a Lighting view serves as the `tex` of
 #: `texture.is_hole`).

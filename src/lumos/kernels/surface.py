@@ -24,12 +24,13 @@ from .layout import (
     SHAPE_CONE,
     SHAPE_CSG,
     SHAPE_CYLINDER,
+    SHAPE_DISK,
     SHAPE_MESH_SOLID,
     SHAPE_PLANE,
     SHAPE_RECT,
     SHAPE_SPHERE,
 )
-from .vec import cross, dot, madd, normalize, sub, xform_normal, xform_point
+from .vec import cross, dot, madd, mul, normalize, sub, xform_normal, xform_point
 
 _INV_2PI = 0.5 / math.pi
 
@@ -110,9 +111,27 @@ def surface_at(surf, o, d, t, ref, b1, b2, part, time):
     q = p
     if m[3, 3] != 0.0:  # a moving shape, displaced by time·motion
         q = (p[0] - time * m[3, 0], p[1] - time * m[3, 1], p[2] - time * m[3, 2])
-    n_obj, u, w = _canonical_normal_uv(info[INFO_KIND], part, xform_point(m, q), info[INFO_FLAGS] & FLAG_READS_UV)
-    n = normalize(xform_normal(m, n_obj))
+    kind = info[INFO_KIND]
+    n_obj, u, w = _canonical_normal_uv(kind, part, xform_point(m, q), info[INFO_FLAGS] & FLAG_READS_UV)
+    axis = _face_axis(kind, part)
+    if axis >= 0:  # a canonical normal ±axis: its world length is known (`shape_nscale`), no square root
+        n = mul(xform_normal(m, n_obj), surf.shape_nscale[s, axis])
+    else:
+        n = normalize(xform_normal(m, n_obj))
     return p, n, n, u, w, info[INFO_MATERIAL], info[INFO_OBJECT], info[INFO_LIGHT]
+
+
+@njit_inline
+def _face_axis(kind, part):
+    """The axis a when the canonical normal of part `part` of a shape of this kind is ±axis a, else -1 (spheres,
+    the sides of cylinders and cones)."""
+    if kind == SHAPE_BOX:
+        return part // 2
+    if kind == SHAPE_RECT or kind == SHAPE_PLANE or kind == SHAPE_DISK:
+        return 2
+    if (kind == SHAPE_CYLINDER or kind == SHAPE_CONE) and part != 0:
+        return 2
+    return -1
 
 
 @njit

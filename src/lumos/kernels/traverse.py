@@ -5,8 +5,9 @@ The walk is over the wide tree (`layout.WIDE_*`: WIDE children per node, collaps
 compile time): at an interior node all the child boxes are tested at once with explicit SIMD
 (`simd.wide_box_test`), the children hit are pushed with their entry distances sorted so that the nearest is
 visited next, and a popped entry is skipped once a closer hit is known. A stack entry is a wide node index, or
-~(WIDE·node + slot) for a leaf child, whose primitives are tested in place. Unbounded shapes (planes) are tested
-before the tree. A csg object is one shape whose test (`kernels.csg`) also fills b1 and b2 of the hit record.
+~(WIDE·node + slot) for a leaf child, whose primitives are tested in place; the any-order walk of shadow rays
+(`_pass_through`) tests a leaf child where it finds it and stacks interior nodes only. Unbounded shapes (planes)
+are tested before the tree. A csg object is one shape whose test (`kernels.csg`) also fills b1 and b2 of the hit record.
 """
 
 import numpy as np
@@ -277,10 +278,50 @@ def _triangle_factor(tri_info, materials, r):
     return materials[mat, MAT_KT], materials[mat, MAT_KT + 1], materials[mat, MAT_KT + 2]
 
 
+#: What `_leaf_through` found: go on, the ray is blocked, or a primitive only the hit-by-hit walk can count is on it.
+_ON, _BLOCKED, _UNSETTLED = 0, 1, 2
+
+
+@njit_inline
+def _leaf_through(geo, tri_info, materials, first, count, o, d, t_min, t_max, setup, okx, oky, okz, time, tr, tg, tb):
+    """`_pass_through`'s test of one leaf (first, count) (`leaf_of`): (tr, tg, tb) times what its primitives on
+    the ray let through, and `_ON`, `_BLOCKED` (the product is as good as 0) or `_UNSETTLED`."""
+    kx, ky, kz, sx, sy, sz = setup
+    if count == LEAF_PACKED:
+        mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = packed_leaf(geo, first, kx, ky, kz, sx, sy, sz, okx,
+                                                                           oky, okz, t_max)
+        for k in range(4):
+            if mask & (1 << k):
+                if _lane(t0, t1, t2, t3, k) <= t_min:
+                    continue
+                f0, f1, f2 = _triangle_factor(tri_info, materials, np.int64(geo.leaf_link[first, LEAF_BASE]) + k)
+                tr, tg, tb = tr * f0, tg * f1, tb * f2
+                if max(tr, tg, tb) < SHADOW_CUTOFF:
+                    return tr, tg, tb, _BLOCKED
+        return tr, tg, tb, _ON
+    for k in range(first, first + count):
+        r = geo.prim_ref[k]
+        if r >= 0:
+            t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)
+            if t <= t_min:
+                continue
+            f0, f1, f2 = _triangle_factor(tri_info, materials, r)
+        else:
+            f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(~r), o, d, t_min, t_max, time)
+            if not settled:
+                return tr, tg, tb, _UNSETTLED
+        tr, tg, tb = tr * f0, tg * f1, tb * f2
+        if max(tr, tg, tb) < SHADOW_CUTOFF:
+            return tr, tg, tb, _BLOCKED
+    return tr, tg, tb, _ON
+
+
 @njit_inline
 def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
     """The traversal behind `transmittance` and `any_hit`: every primitive on the ray with t_min < t < t_max, in
-    traversal order, multiplied in; it stops as soon as the product is (as good as) 0. ((r, g, b), settled)."""
+    traversal order, multiplied in; it stops as soon as the product is (as good as) 0. ((r, g, b), settled).
+    The leaves among a node's children are tested where they are found, and only its interior children go on
+    the stack (the order does not matter: the product is the same)."""
     tr, tg, tb = 1.0, 1.0, 1.0
     for k in range(geo.unbounded.shape[0]):
         f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(geo.unbounded[k]), o, d, t_min, t_max, time)
@@ -297,43 +338,26 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
     ix, iy, iz, ox, oy, oz = rb[0], rb[1], rb[2], rb[3], rb[4], rb[5]
     nx, ny, nz = wide_setup(rb)
     setup = _triangle_setup_if(geo, d)
-    kx, ky, kz, sx, sy, sz = setup
+    kx, ky, kz = setup[0], setup[1], setup[2]
     okx, oky, okz = o[kx], o[ky], o[kz]
-    node = np.int64(0)  # as in closest_hit: a wide node, or ~(WIDE·node + slot) for a leaf child
+    node = np.int64(0)  # a wide node index: the stack holds interior nodes only
     sp = 0
     while True:
-        if node >= 0:
-            mask = wide_box_mask(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_max)
-            sp = push_children(stack, sp, link, node, mask)
-        else:
-            first, count = leaf_of(link, node)
-            if count == LEAF_PACKED:
-                mask, t0, t1, t2, t3, u0, u1, u2, u3, w0, w1, w2, w3 = packed_leaf(
-                    geo, first, kx, ky, kz, sx, sy, sz, okx, oky, okz, t_max)
-                for k in range(4):
-                    if mask & (1 << k):
-                        if _lane(t0, t1, t2, t3, k) <= t_min:
-                            continue
-                        f0, f1, f2 = _triangle_factor(tri_info, materials, np.int64(geo.leaf_link[first, LEAF_BASE])
-                                                      + k)
-                        tr, tg, tb = tr * f0, tg * f1, tb * f2
-                        if max(tr, tg, tb) < SHADOW_CUTOFF:
-                            return (0.0, 0.0, 0.0), True
-                count = 0
-            for k in range(first, first + count):
-                r = geo.prim_ref[k]
-                if r >= 0:
-                    t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, t_max)
-                    if t <= t_min:
-                        continue
-                    f0, f1, f2 = _triangle_factor(tri_info, materials, r)
-                else:
-                    f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(~r), o, d, t_min, t_max, time)
-                    if not settled:
-                        return (tr, tg, tb), False
-                tr, tg, tb = tr * f0, tg * f1, tb * f2
-                if max(tr, tg, tb) < SHADOW_CUTOFF:
-                    return (0.0, 0.0, 0.0), True
+        mask = wide_box_mask(nodes, node, nx, ny, nz, ox, oy, oz, ix, iy, iz, t_max)
+        while mask != 0:
+            k = lowest_bit(mask)
+            mask &= mask - 1
+            count = link[node, WIDE_COUNT + k]
+            if count == 0:
+                stack[sp] = np.int64(link[node, WIDE_CHILD + k])
+                sp += 1
+                continue
+            tr, tg, tb, status = _leaf_through(geo, tri_info, materials, np.int64(link[node, WIDE_CHILD + k]), count,
+                                               o, d, t_min, t_max, setup, okx, oky, okz, time, tr, tg, tb)
+            if status == _BLOCKED:
+                return (0.0, 0.0, 0.0), True
+            if status == _UNSETTLED:
+                return (tr, tg, tb), False
         if sp == 0:
             return (tr, tg, tb), True
         sp -= 1

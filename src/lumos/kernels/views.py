@@ -12,7 +12,8 @@ def geometry_of(sa):
 
 @njit
 def surfaces_of(sa):
-    return Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info)
+    return Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info,
+                    sa.shape_nscale)
 
 
 @njit
@@ -34,7 +35,8 @@ def owned_views(sa):
     with the runtime would release references it never took."""
     return (Geometry(sa.node_box, sa.node_link, sa.prim_ref, sa.tri_verts, sa.shape_xform, sa.shape_info,
                      sa.unbounded, sa.csg_nodes, sa.wide_nodes, sa.wide_link, sa.leaf_tris, sa.leaf_link),
-            Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info),
+            Surfaces(sa.tri_verts, sa.tri_normals, sa.tri_uvs, sa.tri_info, sa.shape_xform, sa.shape_info,
+                    sa.shape_nscale),
             Lighting(sa.materials, sa.ambient, sa.light_kind, sa.light_samples, sa.light_vecs, sa.light_scalars,
                     sa.tex_info, sa.tex_pixels),
             Textures(sa.tex_info, sa.tex_pixels, sa.tri_tangents))

@@ -40,6 +40,7 @@ from ..kernels.bsdf import (
     lobe_probs,
     mirror,
     power_heuristic,
+    power_heuristic_over,
     sample_dielectric,
     sample_smooth,
 )
@@ -50,7 +51,7 @@ from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
 from ..kernels.layout import CAM_APERTURE, LIGHT_SPHERE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS
 from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
-from ..kernels.sobol import pair_seed, sobol_2d_seeded
+from ..kernels.sobol import pair_seed, sobol_block
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
@@ -73,6 +74,8 @@ DIM_VERTEX = 8
 PAIR_PATH = 2
 PAIRS_VERTEX = 3
 SOBOL_PAIRS = PAIR_PATH + 1 * PAIRS_VERTEX
+#: Samples of a pixel whose Sobol points are drawn together (`sobol.sobol_block`: a loop LLVM vectorises).
+SOBOL_CHUNK = 64
 SAMPLER_INDEPENDENT, SAMPLER_SOBOL = 0, 1
 MODE_MIS, MODE_LIGHT, MODE_BSDF = 0, 1, 2
 _MODES = {"mis": MODE_MIS, "light": MODE_LIGHT, "bsdf": MODE_BSDF}
@@ -108,16 +111,16 @@ def _emitter_entry(em, ref, light):
 def _shadow_ray(p, n_geo, wi, dist):
     """The shadow ray towards the light point p + dist·wi: from the origin offset off the surface, aimed at that
     point itself and stopping just short of it (the emitter is a surface too, and a ray aimed along wi from the
-    offset origin would meet a grazing light before the point). Directional lights keep wi."""
+    offset origin would meet a grazing light before the point). Its direction is the whole segment, not a unit
+    vector, so the ray ends at t = 1 − ε (every intersection test is in the ray's own parameter, whatever its
+    length: a square root and a division saved per light sample). Directional lights keep wi and dist."""
     origin = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
     if dist >= config.T_FAR:
         return origin, wi, dist
     to = (p[0] + dist * wi[0] - origin[0], p[1] + dist * wi[1] - origin[1], p[2] + dist * wi[2] - origin[2])
-    t = math.sqrt(to[0] * to[0] + to[1] * to[1] + to[2] * to[2])
-    if not t > 0.0:
+    if not (to[0] != 0.0 or to[1] != 0.0 or to[2] != 0.0):
         return origin, wi, 0.0
-    inv = 1.0 / t
-    return origin, (to[0] * inv, to[1] * inv, to[2] * inv), t * (1.0 - config.RAY_EPSILON)
+    return origin, to, 1.0 - config.RAY_EPSILON
 
 
 @njit_inline
@@ -156,10 +159,10 @@ def _media_update(media_obj, media_ior, n_media, obj, ior, entering):
 
 
 @njit_inline
-def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, points, key, scratch, background):
+def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, points, col, key, scratch, background):
     """Radiance along the camera ray (o, d) at shutter time `time`: one path, in the order of the maths.
 
-    Random numbers: `_draw2(sampler, points, key, pair, dim)` (see there). Returns (rgb, rays
+    Random numbers: `_draw2(sampler, points, col, key, pair, dim)` (see there). Returns (rgb, rays
     traced, t and object id of the first hit (t = −1 on a miss), albedo and shading normal of the first hit (the
     denoiser's guides), the emission of the first hit itself (the light seen directly, which the denoiser
     leaves alone), and the direct light: the part of rgb that `max_depth: 0` gathers — the emission (and
@@ -244,10 +247,10 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         u_lobe = u_pick = 0.0
         lobes = (p_d > 0.0) + (p_s > 0.0) + (p_r > 0.0)
         if p_t > 0.0 or lobes > 1 or em.emit_cdf.shape[0] > 1:
-            u_lobe, u_pick = _draw2(sampler, points, key, pair, dim)
+            u_lobe, u_pick = _draw2(sampler, points, col, key, pair, dim)
         # stage 4: next-event estimation (the smooth lobes only: a mirror or glass cannot meet a light sample)
         if p_d + p_s > 0.0:
-            ul1, ul2 = _draw2(sampler, points, key, pair + 2, dim + 4)
+            ul1, ul2 = _draw2(sampler, points, col, key, pair + 2, dim + 4)
             wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, u_pick, ul1, ul2, time)
             if pdf_light > 0.0 and (delta or mode != MODE_BSDF):
                 cos_i = n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]
@@ -260,15 +263,17 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
                         origin, ws, t_light = _shadow_ray(p, n_geo, wi, dist)
                         rays += 1
                         if not occluded(geo, surf, lit, origin, ws, t_light, stack, stack_t, time):
-                            w = 1.0 if (delta or mode == MODE_LIGHT) else power_heuristic(pdf_light, pdf_bsdf)
-                            w /= pdf_light
+                            if delta or mode == MODE_LIGHT:
+                                w = 1.0 / pdf_light
+                            else:
+                                w = power_heuristic_over(pdf_light, pdf_bsdf)
                             L0 += b0 * c0 * w
                             L1 += b1 * c1 * w
                             L2 += b2 * c2 * w
                             if depth == 0:
                                 D0, D1, D2 = D0 + c0 * w, D1 + c1 * w, D2 + c2 * w
         # stage 5: BSDF sampling: the direction the path goes on in, and its weight f·cos/pdf
-        u1, u2 = _draw2(sampler, points, key, pair + 1, dim + 2)
+        u1, u2 = _draw2(sampler, points, col, key, pair + 1, dim + 2)
         p_smooth = p_d + p_s
         if u_lobe < p_smooth:
             wi, (w0, w1, w2), pdf = sample_smooth(kd, ks, exponent, p_d, p_s, n_s, wo, u_lobe, u1, u2)
@@ -280,11 +285,13 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
             wi = mirror(wo, n_s)
             if n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] <= 0.0:
                 break
-            w0, w1, w2 = kr[0] / p_r, kr[1] / p_r, kr[2] / p_r
+            inv_p = 1.0 / p_r
+            w0, w1, w2 = kr[0] * inv_p, kr[1] * inv_p, kr[2] * inv_p
             prev_delta = True
         else:
             u_t = (u_lobe - p_smooth - p_r) / p_t  # uniform in [0, 1) again: reflect or refract
-            w0, w1, w2 = kt[0] / p_t, kt[1] / p_t, kt[2] / p_t
+            inv_p = 1.0 / p_t
+            w0, w1, w2 = kt[0] * inv_p, kt[1] * inv_p, kt[2] * inv_p
             prev_delta = True
             if is_solid(surf, ref):
                 n1, n2 = _media_across(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
@@ -306,9 +313,10 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
             q = min(max(b0, b1, b2) * eta_scale, 0.95)
             if rand_key(key, dim + 6) >= q:
                 break
-            b0 /= q
-            b1 /= q
-            b2 /= q
+            inv_q = 1.0 / q
+            b0 *= inv_q
+            b1 *= inv_q
+            b2 *= inv_q
         depth += 1
         if depth >= MAX_BOUNCES:
             break
@@ -319,26 +327,15 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
 
 
 @njit_inline
-def _draw2(sampler, points, key, pair, dim):
+def _draw2(sampler, points, col, key, pair, dim):
     """Two random numbers for a pair of dimensions of a sample: padded Owen-scrambled Sobol points
     (`kernels.sobol`) for the pairs that matter most (the pixel, the lens, and the first vertex's lobe choice
-    and light pick, BSDF direction and point on a light), read from the sample's `points` (`_sobol_points`);
-    independent ones (dimensions dim, dim + 1 of the sample's hash `key`, from one hash) for the rest or with
-    `sampler: independent`."""
+    and light pick, BSDF direction and point on a light), read from column `col` of the pixel's `points`
+    (`sobol.sobol_block`, drawn for a chunk of its samples at once); independent ones (dimensions dim, dim + 1
+    of the sample's hash `key`, from one hash) for the rest or with `sampler: independent`."""
     if sampler == SAMPLER_SOBOL and pair < SOBOL_PAIRS:
-        return points[2 * pair], points[2 * pair + 1]
+        return points[2 * pair, col], points[2 * pair + 1, col]
     return rand2_key(key, dim)
-
-
-@njit_inline
-def _sobol_points(seeds, spp, sample, points):
-    """The Sobol points of every pair of one sample, into points (2·SOBOL_PAIRS): drawn together before the path
-    starts, their hash chains are independent of one another and of the path, so the processor runs them side
-    by side (drawn one by one as the path needs them, each waited for its own chain)."""
-    for k in range(SOBOL_PAIRS):
-        u, v = sobol_2d_seeded(seeds[k], spp, sample)
-        points[2 * k] = u
-        points[2 * k + 1] = v
 
 
 @njit
@@ -361,11 +358,16 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
     denoiser read is stored, a third of the stores per sample otherwise), sums2 (H, W, 3) of its square and
     guides (H, W, 12) of albedo, normal, the first hit's own emission and the direct light; depth and object_id
     from sample 0."""
-    for y in prange(y0, y1):
+    half = (y1 - y0 + 1) // 2
+    for i in prange(y0, y1):
+        # even rows of the band first, then odd ones: prange hands each thread a contiguous run of i, and neighbouring
+        # rows cost alike, so each thread gets a comb of the band rather than one end of it (measured on the
+        # Cornell box, whose light rows are cheap: 4% of a band's time was one thread waiting for the other)
+        y = y0 + (2 * (i - y0) if i - y0 < half else 2 * (i - y0 - half) + 1)
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch()
         seeds = np.empty(SOBOL_PAIRS, np.uint64)  # the pixel's Sobol pair seeds (`sobol.pair_seed`)
-        points = np.empty(2 * SOBOL_PAIRS)  # the sample's Sobol points, pair by pair
+        points = np.empty((2 * SOBOL_PAIRS, SOBOL_CHUNK))  # a chunk of the pixel's samples' Sobol points
         rays = 0
         bad = 0
         for x in range(width):
@@ -375,20 +377,22 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
             for k in range(SOBOL_PAIRS):
                 seeds[k] = pair_seed(pixel_key, k)
             for s in range(s0, s1):
+                col = (s - s0) % SOBOL_CHUNK
+                if sampler == SAMPLER_SOBOL and col == 0:
+                    sobol_block(seeds, spp, s, min(SOBOL_CHUNK, s1 - s), points)
                 key = pixel_sample_key(pixel_h, s)  # = rng.sample_key(seed, pixel, s)
-                if sampler == SAMPLER_SOBOL:
-                    _sobol_points(seeds, spp, s, points)
-                u1, u2 = _draw2(sampler, points, key, 0, 0)
+                u1, u2 = _draw2(sampler, points, col, key, 0, 0)
                 fx, fy = _pixel_point(filter_kind, u1, u2, x, y)
                 lx, ly = 0.5, 0.5
                 if cam_params[CAM_APERTURE] != 0.0:
-                    lx, ly = _draw2(sampler, points, key, 1, 2)
+                    lx, ly = _draw2(sampler, points, col, key, 1, 2)
                 o, dr = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
                 tau = cam_time[0]
                 if cam_time[1] > cam_time[0]:
                     tau = cam_time[0] + (cam_time[1] - cam_time[0]) * rand_key(key, DIM_TIME)
                 rgb, n, t, obj, alb, nrm, emits, direct = trace_path(geo, surf, lit, tex, em, o, dr, tau, max_depth,
-                                                                     mode, sampler, points, key, scratch, sa.background)
+                                                                     mode, sampler, points, col, key, scratch,
+                                                                     sa.background)
                 rays += n
                 r, g, b = rgb
                 if not (math.isfinite(r) and math.isfinite(g) and math.isfinite(b)):
