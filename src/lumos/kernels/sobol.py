@@ -1,12 +1,14 @@
 """Low-discrepancy sample points for the path tracer: padded, Owen-scrambled 2-D Sobol points.
 
     u, v = sobol_2d(pixel_key, spp, sample, dim)      # the `sample`-th of the pixel's `spp` points, dimension pair `dim`
+    sobol_block(seeds, spp, s0, count, points)         # a renderer's form: many samples and pairs in one vector loop
 
 Each pair of dimensions (the position in the pixel, a BSDF direction, a point on a light...) gets its own copy of
 the first two dimensions of the Sobol sequence, a (0, 2)-sequence in base 2: any 2^k consecutive points of it
 stratify the unit square into 2^k elementary intervals of every shape. The copies are decorrelated from one
-another by shuffling the sample index with a per-pixel, per-pair random permutation of [0, spp) (Kensler 2013,
-"Correlated Multi-Jittered Sampling", its hashed permutation of any length), and each point is Owen-scrambled
+another by shuffling the sample index with a per-pixel, per-pair random permutation of [0, spp) (`shuffle`: for a
+power of two, a nested uniform scramble of the index, as Burley 2020 shuffles; otherwise Kensler 2013's hashed
+permutation of any length, "Correlated Multi-Jittered Sampling"), and each point is Owen-scrambled
 (nested uniform scrambling of its binary digits) with hash-based Laine–Karras permutations (Burley 2020,
 "Practical Hash-based Owen Scrambling", JCGT 9(4)) — the "padded Sobol" sampler of pbrt-v4.
 

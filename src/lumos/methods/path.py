@@ -360,9 +360,10 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
     from sample 0."""
     half = (y1 - y0 + 1) // 2
     for i in prange(y0, y1):
-        # even rows of the band first, then odd ones: prange hands each thread a contiguous run of i, and neighbouring
-        # rows cost alike, so each thread gets a comb of the band rather than one end of it (measured on the
-        # Cornell box, whose light rows are cheap: 4% of a band's time was one thread waiting for the other)
+        # even rows of the band first, then odd ones: prange hands each thread a contiguous run of i, and
+        # neighbouring rows cost alike, so each thread gets a comb of the band rather than one end of it (on the
+        # Cornell box, by rays counted per row, the busier half of a band had 4.3% more than half the work;
+        # combed, 0.5%)
         y = y0 + (2 * (i - y0) if i - y0 < half else 2 * (i - y0 - half) + 1)
         geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
         scratch = _scratch()
