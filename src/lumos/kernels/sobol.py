@@ -217,7 +217,9 @@ def sobol_2d_seeded(h, spp, sample):
 def sobol_block(seeds, spp, s0, count, points):
     """Points of samples s0 … s0+count−1 for every pair seed in `seeds` (`pair_seed`), into points (2·pairs,
     ≥ count): row 2k holds pair k's u, row 2k+1 its v, by sample. Equal to `sobol_2d_seeded` point by point; for
-    a power-of-two spp the loop over samples has no branch, and LLVM runs it several samples to a vector."""
+    a power-of-two spp the loop over samples has no branch, and LLVM runs it several samples to a vector. It takes
+    `shuffle`'s power-of-two test once, outside the loop, rather than calling `shuffle` per sample: with the test
+    (and `permute`'s loop) inside, LLVM keeps the loop scalar, 4× slower (measured: 1.3 against 5.0 µs a block)."""
     n = np.uint64(spp)
     pow2 = n & (n - _ONE) == np.uint64(0)
     mask = n - _ONE
