@@ -7,7 +7,8 @@ a kernel are worth, so two versions timed one after the other in separate runs c
 imported into one process (the revision's `src/lumos`, from `git archive`, as the package `lumos_base`; the working
 tree's as `lumos_work`), compiled, and rendered alternately, round by round, each round starting with the other
 one; the ratio of each round's two times cancels the drift that both see. Reported: min / median / max time of
-each and the median of the per-round ratios (work / base, below 1 is faster).
+each and the median of the per-round ratios (work / base, below 1 is faster), and whether the last round's two
+images are the same.
 
 Both compile into a fresh temporary NUMBA_CACHE_DIR (about a minute and a half each): lumos's stale-cache guard
 (`kernels.jit`) would otherwise wipe the other version's cached kernels, or yours.
@@ -27,6 +28,8 @@ import tarfile
 import tempfile
 import time
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -73,12 +76,14 @@ def main() -> None:
             module.render(scenes[name], spp=1, **settings)
             print(f"{name}: compiled and warm in {time.perf_counter() - t0:.0f} s", flush=True)
         times = {name: [] for name in versions}
+        images = {}
         for r in range(args.rounds):
             order = ["base", "work"] if r % 2 == 0 else ["work", "base"]
             for name in order:
                 t0 = time.perf_counter()
-                versions[name].render(scenes[name], spp=args.spp, seed=r, **settings)
+                image = versions[name].render(scenes[name], spp=args.spp, seed=r, **settings)
                 times[name].append(time.perf_counter() - t0)
+                images[name] = image.array
         print(f"{Path(args.scene).name}, {args.size}x{args.size}, {args.spp} spp, max_depth {args.max_depth}, "
               f"{args.threads} threads, {args.rounds} rounds; base = {args.rev}, work = the working tree")
         for name in versions:
@@ -87,6 +92,8 @@ def main() -> None:
         ratios = [w / b for w, b in zip(times["work"], times["base"])]
         print(f"  work / base: median of per-round ratios {statistics.median(ratios):.3f} "
               f"(min {min(ratios):.3f}, max {max(ratios):.3f})")
+        diff = np.abs(images["work"].astype(np.float64) - images["base"]).max()
+        print("  last round's images: " + ("identical" if diff == 0 else f"differ, max |work - base| = {diff:.3g}"))
     finally:
         shutil.rmtree(tree, ignore_errors=True)
 

@@ -6,7 +6,18 @@ import numpy as np
 import pytest
 
 from lumos.kernels.rng import sample_key
-from lumos.kernels.sobol import _pascal_reversed, pair_seed, permute, shuffle, sobol_2d, sobol_2d_seeded, sobol_block
+from lumos.kernels.sobol import (
+    _WALK_STEPS,
+    _next_pow2_mask,
+    _pascal_reversed,
+    _permute_round,
+    pair_seed,
+    permute,
+    shuffle,
+    sobol_2d,
+    sobol_2d_seeded,
+    sobol_block,
+)
 
 
 def _points(pixel_key, spp, pair):
@@ -58,11 +69,14 @@ def test_pascal_reversed_is_the_sobol_matrix_product():
         assert int(_pascal_reversed(np.uint64(j))) == want, j
 
 
-@pytest.mark.parametrize("spp, s0, count", [(64, 0, 64), (64, 10, 30), (100, 0, 64), (7, 3, 4), (1, 0, 1)])
+@pytest.mark.parametrize("spp, s0, count", [(64, 0, 64), (64, 10, 30), (100, 0, 64), (7, 3, 4), (1, 0, 1),
+                                             (2, 0, 2), (3, 0, 3), (129, 64, 64), (1000, 936, 64), (65537, 3, 61)])
 def test_block_is_the_points_one_by_one(spp, s0, count):
+    """Every spp, power of two or not (whose cycle walk `sobol_block` takes apart: n just above a power of two
+    walks longest, 129 and 65537), gives the points `sobol_2d_seeded` gives one by one."""
     seeds = np.array([pair_seed(np.uint64(int(sample_key(2, 31, 1 << 62))), k) for k in range(5)], np.uint64)
     points = np.full((10, 64), np.nan)
-    sobol_block(seeds, spp, s0, count, points)
+    sobol_block(seeds, spp, s0, count, points, np.empty(64, np.uint64))
     for k in range(5):
         for i in range(count):
             assert (points[2 * k, i], points[2 * k + 1, i]) == sobol_2d_seeded(seeds[k], spp, s0 + i)
@@ -75,3 +89,22 @@ def test_seeded_points_are_the_pixels_points():
         h = np.uint64(pair_seed(np.uint64(key), pair))
         for s in (0, 7, 63):
             assert sobol_2d_seeded(h, 64, s) == sobol_2d(np.uint64(key), 64, s, pair)
+
+
+def test_block_cases_walk_past_the_vector_steps():
+    """The spp 129 case above has samples whose cycle walk takes more than the `_WALK_STEPS` steps `sobol_block`
+    takes for every sample at once, so its scalar rest is exercised (and checked equal)."""
+    seeds = [pair_seed(np.uint64(int(sample_key(2, 31, 1 << 62))), k) for k in range(5)]
+    n = np.uint64(129)
+    w = _next_pow2_mask(n)
+    longest = 0
+    for h in seeds:
+        p = np.uint64(h) & np.uint64(0xFFFFFFFF)
+        for i in range(64, 128):
+            j, steps = np.uint64(i), 0
+            while True:
+                j, steps = _permute_round(j, w, p), steps + 1
+                if j < n:
+                    break
+            longest = max(longest, steps)
+    assert longest > _WALK_STEPS

@@ -1,7 +1,7 @@
 """Low-discrepancy sample points for the path tracer: padded, Owen-scrambled 2-D Sobol points.
 
     u, v = sobol_2d(pixel_key, spp, sample, dim)      # the `sample`-th of the pixel's `spp` points, dimension pair `dim`
-    sobol_block(seeds, spp, s0, count, points)         # a renderer's form: many samples and pairs in one vector loop
+    sobol_block(seeds, spp, s0, count, points, walk)   # a renderer's form: many samples and pairs in one vector loop
 
 Each pair of dimensions (the position in the pixel, a BSDF direction, a point on a light...) gets its own copy of
 the first two dimensions of the Sobol sequence, a (0, 2)-sequence in base 2: any 2^k consecutive points of it
@@ -134,41 +134,61 @@ def sobol_index_dims(i):
 
 
 @njit
-def permute(i, n, p):
-    """Element i of a pseudo-random permutation of [0, n) chosen by the 32-bit seed p (Kensler 2013: a hash
-    that is a bijection on the next power of two, cycle-walked until it falls below n)."""
-    if n <= np.uint64(1):
-        return np.uint64(0)
+def _next_pow2_mask(n):
+    """2^m − 1 for the least 2^m >= n (n >= 2)."""
     w = n - _ONE
     w |= w >> _S1
     w |= w >> _S2
     w |= w >> _S4
     w |= w >> _S8
     w |= w >> _S16
+    return w
+
+
+@njit
+def _permute_round(i, w, p):
+    """One step of `permute`'s cycle walk: Kensler's hash, a bijection on [0, w] (w = 2^m − 1)."""
+    i ^= p
+    i = (i * np.uint64(0xE170893D)) & _U32
+    i ^= p >> _S16
+    i ^= (i & w) >> _S4
+    i ^= p >> _S8
+    i = (i * np.uint64(0x0929EB3F)) & _U32
+    i ^= p >> _S23
+    i ^= (i & w) >> _S1
+    i = (i * (_ONE | (p >> _S27))) & _U32
+    i = (i * np.uint64(0x6935FA69)) & _U32
+    i ^= (i & w) >> _S11
+    i = (i * np.uint64(0x74DCB303)) & _U32
+    i ^= (i & w) >> _S2
+    i = (i * np.uint64(0x9E501CC3)) & _U32
+    i ^= (i & w) >> _S2
+    i = (i * np.uint64(0xC860A3DF)) & _U32
+    i &= w
+    i ^= i >> _S5
+    return i
+
+
+@njit
+def permute(i, n, p):
+    """Element i of a pseudo-random permutation of [0, n) chosen by the 32-bit seed p (Kensler 2013: a hash
+    that is a bijection on the next power of two, cycle-walked until it falls below n)."""
+    if n <= np.uint64(1):
+        return np.uint64(0)
+    w = _next_pow2_mask(n)
     while True:
-        i ^= p
-        i = (i * np.uint64(0xE170893D)) & _U32
-        i ^= p >> _S16
-        i ^= (i & w) >> _S4
-        i ^= p >> _S8
-        i = (i * np.uint64(0x0929EB3F)) & _U32
-        i ^= p >> _S23
-        i ^= (i & w) >> _S1
-        i = (i * (_ONE | (p >> _S27))) & _U32
-        i = (i * np.uint64(0x6935FA69)) & _U32
-        i ^= (i & w) >> _S11
-        i = (i * np.uint64(0x74DCB303)) & _U32
-        i ^= (i & w) >> _S2
-        i = (i * np.uint64(0x9E501CC3)) & _U32
-        i ^= (i & w) >> _S2
-        i = (i * np.uint64(0xC860A3DF)) & _U32
-        i &= w
-        i ^= i >> _S5
+        i = _permute_round(i, w, p)
         if i < n:
             break
     if n & (n - _ONE) == np.uint64(0):
         return (i + p) & (n - _ONE)  # a power of two: the remainder without a division
     return (i + p) % n
+
+
+#: Steps of `permute`'s cycle walk that `sobol_block` takes for every sample at once, as selects in a loop LLVM
+#: vectorises; a step leaves an index at or above n with probability below 1/2, so after four about one sample in
+#: twenty walks on, alone.
+_WALK_STEPS = 4
 
 
 @njit
@@ -214,15 +234,18 @@ def sobol_2d_seeded(h, spp, sample):
 
 
 @njit
-def sobol_block(seeds, spp, s0, count, points):
+def sobol_block(seeds, spp, s0, count, points, walk):
     """Points of samples s0 … s0+count−1 for every pair seed in `seeds` (`pair_seed`), into points (2·pairs,
-    ≥ count): row 2k holds pair k's u, row 2k+1 its v, by sample. Equal to `sobol_2d_seeded` point by point; for
-    a power-of-two spp the loop over samples has no branch, and LLVM runs it several samples to a vector. It takes
+    ≥ count): row 2k holds pair k's u, row 2k+1 its v, by sample; `walk` (uint64, ≥ count) is scratch. Equal
+    to `sobol_2d_seeded` point by point; for a power-of-two spp the loop over samples has no branch, and LLVM runs
+    it several samples to a vector. It takes
     `shuffle`'s power-of-two test once, outside the loop, rather than calling `shuffle` per sample: with the test
-    (and `permute`'s loop) inside, LLVM keeps the loop scalar, 4× slower (measured: 1.3 against 5.0 µs a block)."""
+    (and `permute`'s loop) inside, LLVM keeps the loop scalar, 4× slower (measured: 1.3 against 5.0 µs a block).
+    Other spp take `permute`'s cycle walk apart the same way (`_WALK_STEPS`), so that those loops vectorise too."""
     n = np.uint64(spp)
     pow2 = n & (n - _ONE) == np.uint64(0)
     mask = n - _ONE
+    w = _next_pow2_mask(n) if n > _ONE else np.uint64(0)
     for k in range(seeds.shape[0]):
         h = np.uint64(seeds[k])
         p = h & _U32
@@ -232,8 +255,24 @@ def sobol_block(seeds, spp, s0, count, points):
                 points[2 * k, i] = u
                 points[2 * k + 1, i] = v
         else:
+            # `permute`, lane by lane the same: the first _WALK_STEPS steps of the cycle walk for every sample
+            # (selects, no branch: a vector loop), the rare rest alone, then the remainder (i + p) mod n as
+            # i + (p mod n), less n once (a vector loop has no integer division)
             for i in range(count):
-                u, v = _point(permute(np.uint64(s0 + i), n, p), h)
+                j = _permute_round(np.uint64(s0 + i), w, p)
+                for _ in range(_WALK_STEPS - 1):
+                    j = _permute_round(j, w, p) if j >= n else j
+                walk[i] = j
+            for i in range(count):
+                j = walk[i]
+                while j >= n:
+                    j = _permute_round(j, w, p)
+                walk[i] = j
+            pn = p % n
+            for i in range(count):
+                j = walk[i] + pn
+                j = j - n if j >= n else j
+                u, v = _point(j, h)
                 points[2 * k, i] = u
                 points[2 * k + 1, i] = v
 

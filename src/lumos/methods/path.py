@@ -70,7 +70,7 @@ DIM_TIME = 4
 DIM_PATH = 8
 DIM_VERTEX = 8
 #: Dimension pairs drawn from Sobol points (`_draw2`): 0 pixel, 1 lens, then per vertex k PAIR_PATH + k·PAIRS_VERTEX
-#: + (0 lobe and emitter, 1 direction, 2 point on the emitter), for the first two vertices.
+#: + (0 lobe and emitter, 1 direction, 2 point on the emitter), for the first vertex only (vertex 0, the first surface hit).
 PAIR_PATH = 2
 PAIRS_VERTEX = 3
 SOBOL_PAIRS = PAIR_PATH + 1 * PAIRS_VERTEX
@@ -369,6 +369,7 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
         scratch = _scratch()
         seeds = np.empty(SOBOL_PAIRS, np.uint64)  # the pixel's Sobol pair seeds (`sobol.pair_seed`)
         points = np.empty((2 * SOBOL_PAIRS, SOBOL_CHUNK))  # a chunk of the pixel's samples' Sobol points
+        walk = np.empty(SOBOL_CHUNK, np.uint64)  # sobol_block's scratch
         rays = 0
         bad = 0
         for x in range(width):
@@ -380,7 +381,7 @@ def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0
             for s in range(s0, s1):
                 col = (s - s0) % SOBOL_CHUNK
                 if sampler == SAMPLER_SOBOL and col == 0:
-                    sobol_block(seeds, spp, s, min(SOBOL_CHUNK, s1 - s), points)
+                    sobol_block(seeds, spp, s, min(SOBOL_CHUNK, s1 - s), points, walk)
                 key = pixel_sample_key(pixel_h, s)  # = rng.sample_key(seed, pixel, s)
                 u1, u2 = _draw2(sampler, points, col, key, 0, 0)
                 fx, fy = _pixel_point(filter_kind, u1, u2, x, y)
