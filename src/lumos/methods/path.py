@@ -70,7 +70,7 @@ DIM_TIME = 4
 DIM_PATH = 8
 DIM_VERTEX = 8
 #: Dimension pairs drawn from Sobol points (`_draw2`): 0 pixel, 1 lens, then per vertex k PAIR_PATH + k·PAIRS_VERTEX
-#: + (0 lobe and emitter, 1 direction, 2 point on the emitter), for the first vertex only (vertex 0, the first surface hit).
+#: + (0 lobe and emitter, 1 direction, 2 point on the emitter), for the first vertex only (the first surface hit).
 PAIR_PATH = 2
 PAIRS_VERTEX = 3
 SOBOL_PAIRS = PAIR_PATH + 1 * PAIRS_VERTEX
