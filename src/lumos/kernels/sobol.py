@@ -135,7 +135,7 @@ def sobol_index_dims(i):
 
 @njit
 def _next_pow2_mask(n):
-    """2^m − 1 for the least 2^m >= n (n >= 2)."""
+    """2^m − 1 for the least 2^m >= n (n >= 1)."""
     w = n - _ONE
     w |= w >> _S1
     w |= w >> _S2
@@ -245,7 +245,7 @@ def sobol_block(seeds, spp, s0, count, points, walk):
     n = np.uint64(spp)
     pow2 = n & (n - _ONE) == np.uint64(0)
     mask = n - _ONE
-    w = _next_pow2_mask(n) if n > _ONE else np.uint64(0)
+    w = _next_pow2_mask(n)
     for k in range(seeds.shape[0]):
         h = np.uint64(seeds[k])
         p = h & _U32
