@@ -154,6 +154,40 @@ def _cosine_direction(nx, ny, nz, u1, u2):
     return a * tx + b * bx + c * nx, a * ty + b * by + c * ny, a * tz + b * bz + c * nz, c * INV_PI
 
 
+@numba.njit(inline="always")
+def _emitted_weight(light, depth, prev_pdf, t, cos_l):
+    """The MIS weight of the light met at distance t (cosine cos_l there) by a cosine-sampled ray of pdf prev_pdf
+    (power heuristic against light sampling); 1 for the camera ray."""
+    if depth == 0:
+        return 1.0
+    pdf_l = t * t / (cos_l * light[4, 0])
+    return prev_pdf * prev_pdf / (prev_pdf * prev_pdf + pdf_l * pdf_l)
+
+
+@numba.njit(inline="always")
+def _nee_factor(light, cos_i, cos_l, d2):
+    """What an unblocked light sample adds to a Lambertian surface, per unit kd and radiance: f·cos/pdf_l times the
+    power heuristic's weight, (cos/π)·pdf_l / (pdf_l² + pdf_b²)."""
+    pdf_l = d2 / (cos_l * light[4, 0])
+    pdf_b = cos_i * INV_PI
+    return cos_i * INV_PI * pdf_l / (pdf_l * pdf_l + pdf_b * pdf_b)
+
+
+@numba.njit(inline="always")
+def _bounce(nx, ny, nz, k0, k1, k2, b0, b1, b2, depth, state):
+    """BSDF sampling and roulette at a Lambertian vertex: (new direction, its pdf, throughput, whether the path goes
+    on). The weight f·cos/pdf of a cosine-sampled Lambertian lobe is kd; from the RR_DEPTH-th bounce the path goes on
+    with probability q = min(max throughput, 0.95) and is divided by it."""
+    dx, dy, dz, pdf = _cosine_direction(nx, ny, nz, _rand(state), _rand(state))
+    b0, b1, b2 = b0 * k0, b1 * k1, b2 * k2
+    if depth + 1 >= RR_DEPTH:
+        q = min(max(b0, b1, b2), 0.95)
+        if _rand(state) >= q:
+            return dx, dy, dz, pdf, b0, b1, b2, False
+        b0, b1, b2 = b0 / q, b1 / q, b2 / q
+    return dx, dy, dz, pdf, b0, b1, b2, True
+
+
 # ------------------------------------------------------------------------------------------- the floor kernel
 
 @numba.njit(inline="always")
@@ -232,7 +266,6 @@ def _hit_light(light, ox, oy, oz, dx, dy, dz):
 @numba.njit(parallel=True, nogil=True, error_model="numpy")
 def render_floor(rects, boxes, kd, light, camera, width, height, spp, max_depth, seed, out):
     """The scene-specific kernel: the mean of spp paths per pixel into out (H, W, 3)."""
-    area = light[4, 0]
     for y in numba.prange(height):
         state = np.empty(1, np.uint64)
         for x in range(width):
@@ -248,11 +281,8 @@ def render_floor(rects, boxes, kd, light, camera, width, height, spp, max_depth,
                     t, mat, nx, ny, nz = _hit_scene(rects, boxes, ox, oy, oz, dx, dy, dz, 1e30, False)
                     t_l = _hit_light(light, ox, oy, oz, dx, dy, dz)
                     if t_l > 0.0 and (t < 0.0 or t_l < t):  # the light, weighted against light sampling
-                        w = 1.0
-                        if depth > 0:
-                            cos_l = -(light[3, 0] * dx + light[3, 1] * dy + light[3, 2] * dz)
-                            pdf_l = t_l * t_l / (cos_l * area)
-                            w = prev_pdf * prev_pdf / (prev_pdf * prev_pdf + pdf_l * pdf_l)
+                        cos_l = -(light[3, 0] * dx + light[3, 1] * dy + light[3, 2] * dz)
+                        w = _emitted_weight(light, depth, prev_pdf, t_l, cos_l)
                         L0 += b0 * light[5, 0] * w
                         L1 += b1 * light[5, 1] * w
                         L2 += b2 * light[5, 2] * w
@@ -270,20 +300,13 @@ def render_floor(rects, boxes, kd, light, camera, width, height, spp, max_depth,
                     cos_i = nx * wx + ny * wy + nz * wz
                     if cos_i > 0.0 and cos_l > 0.0:
                         if _hit_scene(rects, boxes, sx, sy, sz, lx - sx, ly - sy, lz - sz, 1.0 - 1e-6, True)[0] < 0.0:
-                            pdf_l = d2 / (cos_l * area)
-                            pdf_b = cos_i * INV_PI
-                            f = cos_i * INV_PI * pdf_l / (pdf_l * pdf_l + pdf_b * pdf_b)
+                            f = _nee_factor(light, cos_i, cos_l, d2)
                             L0 += b0 * k0 * light[5, 0] * f
                             L1 += b1 * k1 * light[5, 1] * f
                             L2 += b2 * k2 * light[5, 2] * f
-                    # BSDF sampling: the weight f·cos/pdf of a cosine-sampled Lambertian lobe is kd
-                    dx, dy, dz, prev_pdf = _cosine_direction(nx, ny, nz, _rand(state), _rand(state))
-                    b0, b1, b2 = b0 * k0, b1 * k1, b2 * k2
-                    if depth + 1 >= RR_DEPTH:
-                        q = min(max(b0, b1, b2), 0.95)
-                        if _rand(state) >= q:
-                            break
-                        b0, b1, b2 = b0 / q, b1 / q, b2 / q
+                    dx, dy, dz, prev_pdf, b0, b1, b2, alive = _bounce(nx, ny, nz, k0, k1, k2, b0, b1, b2, depth, state)
+                    if not alive:
+                        break
                     depth += 1
                     ox, oy, oz = sx, sy, sz
                 acc0 += L0
@@ -305,7 +328,6 @@ def _stacks():
 def render_floor_bvh(sa, light, camera, width, height, spp, max_depth, seed, out):
     """`render_floor` with every hit found by lumos's `closest_hit` / `any_hit` and read by `surface_at` (the light
     is in lumos's BVH: a hit on it is the emitter)."""
-    area = light[4, 0]
     for y in numba.prange(height):
         geo, surf, lit = geometry_of(sa), surfaces_of(sa), lighting_of(sa)
         stack, stack_t = _stacks()
@@ -329,10 +351,7 @@ def render_floor_bvh(sa, light, camera, width, height, spp, max_depth, seed, out
                     if light_id >= 0:
                         cos_l = -(light[3, 0] * dx + light[3, 1] * dy + light[3, 2] * dz)
                         if cos_l > 0.0:
-                            w = 1.0
-                            if depth > 0:
-                                pdf_l = t * t / (cos_l * area)
-                                w = prev_pdf * prev_pdf / (prev_pdf * prev_pdf + pdf_l * pdf_l)
+                            w = _emitted_weight(light, depth, prev_pdf, t, cos_l)
                             L0 += b0 * light[5, 0] * w
                             L1 += b1 * light[5, 1] * w
                             L2 += b2 * light[5, 2] * w
@@ -351,19 +370,13 @@ def render_floor_bvh(sa, light, camera, width, height, spp, max_depth, seed, out
                     cos_i = nx * wx + ny * wy + nz * wz
                     if cos_i > 0.0 and cos_l > 0.0:
                         if not any_hit(geo, (sx, sy, sz), (lx - sx, ly - sy, lz - sz), 0.0, 1.0 - 1e-6, stack, 0.0):
-                            pdf_l = d2 / (cos_l * area)
-                            pdf_b = cos_i * INV_PI
-                            f = cos_i * INV_PI * pdf_l / (pdf_l * pdf_l + pdf_b * pdf_b)
+                            f = _nee_factor(light, cos_i, cos_l, d2)
                             L0 += b0 * k0 * light[5, 0] * f
                             L1 += b1 * k1 * light[5, 1] * f
                             L2 += b2 * k2 * light[5, 2] * f
-                    dx, dy, dz, prev_pdf = _cosine_direction(nx, ny, nz, _rand(state), _rand(state))
-                    b0, b1, b2 = b0 * k0, b1 * k1, b2 * k2
-                    if depth + 1 >= RR_DEPTH:
-                        q = min(max(b0, b1, b2), 0.95)
-                        if _rand(state) >= q:
-                            break
-                        b0, b1, b2 = b0 / q, b1 / q, b2 / q
+                    dx, dy, dz, prev_pdf, b0, b1, b2, alive = _bounce(nx, ny, nz, k0, k1, k2, b0, b1, b2, depth, state)
+                    if not alive:
+                        break
                     depth += 1
                     ox, oy, oz = sx, sy, sz
                 acc0 += L0
