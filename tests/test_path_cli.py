@@ -113,19 +113,28 @@ def _startup_seconds() -> float:
     return float(os.environ.get("LUMOS_TEST_STARTUP_S", "6"))
 
 
-@pytest.mark.slow
 def test_first_run_says_it_compiles_and_keeps_it_out_of_the_render_time(box, tmp_path):
-    """With an empty kernel cache the command says it is compiling, and its render time and ray rate leave
-    the compiling out (jit_s holds it)."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    """With a kernel missing from the cache the command says it is compiling, and its render time and ray rate
+    leave the compiling out (jit_s holds it). The cache is a copy of this install's with one small top-level
+    raster kernel taken out, so only that one compiles (its callees load)."""
+    import shutil
+
+    from lumos.kernels.cache import cache_dirs
+
+    cache = tmp_path / "cache"
+    source = cache_dirs()[0]
+    if source.is_dir():
+        shutil.copytree(source, cache)
+    for entry in cache.glob("kernels/raster.project_vertices-*"):
+        entry.unlink()
+    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache))
     stats = tmp_path / "stats.json"
-    proc = subprocess.run(lumos_cmd("render", box, "-o", tmp_path / "a.png", "--method", "raycast", "--stats", stats),
+    proc = subprocess.run(lumos_cmd("render", box, "-o", tmp_path / "a.png", "--method", "raster", "--stats", stats),
                           capture_output=True, text=True, timeout=600, env=env)
     assert proc.returncode == 0, proc.stderr
     assert "compiling kernels, once: about" in proc.stderr
     figures = json.loads(stats.read_text())
-    assert figures["jit_s"] > 1.0 and figures["render_s"] < figures["jit_s"]
-    assert "compiling kernels" in proc.stderr.splitlines()[-1]  # the summary names it
-    again = subprocess.run(lumos_cmd("render", box, "-o", tmp_path / "b.png", "--method", "raycast"),
+    assert figures["jit_s"] > 0.0 and figures["render_s"] + figures["build_s"] < figures["total_s"] - 0.5 * figures["jit_s"]
+    again = subprocess.run(lumos_cmd("render", box, "-o", tmp_path / "b.png", "--method", "raster"),
                            capture_output=True, text=True, timeout=600, env=env)
     assert again.returncode == 0 and "compiling" not in again.stderr

@@ -126,7 +126,7 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
     Numba spent compiling kernels (a first run only), which build_s and render_s exclude.
     """
     from .compile import compile_scene
-    from .compiling import ESTIMATE_S, watch_compiles
+    from .compiling import estimate_s, watch_compiles
     from .image import Image
     from .progress import make_progress
     from .scene.loader import load_scene
@@ -142,8 +142,8 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
 
     def say_compiling():
         if progress is True:
-            print(f"lumos: compiling kernels, once: about {ESTIMATE_S.get(cfg.method, 40)} s "
-                  "(they are cached for the next runs)", file=sys.stderr, flush=True)
+            print(f"lumos: compiling kernels, once: about {estimate_s(cfg.method):.0f} s (they are cached for the "
+                  "next runs; `lumos warmup` compiles them all ahead)", file=sys.stderr, flush=True)
 
     with watch_compiles(on_first=say_compiling) as watch:
         try:

@@ -192,6 +192,16 @@ def build_parser() -> argparse.ArgumentParser:
     rsolve.add_argument("-q", "--quiet", action="store_true", help="no progress lines and no summary")
     rsolve.set_defaults(run=run_radiosity_solve)
 
+    warm = commands.add_parser("warmup", help="compile every kernel now (in parallel), so no render waits for it",
+                               description="Compile (or check) lumos's kernels ahead of the first render, one "
+                               "process per kernel family, and say where the cache lives. `pip install .` does this "
+                               "when it builds the wheel; editable installs, Dask workers and CI run it themselves.")
+    warm.add_argument("--methods", metavar="M,...", help="only these families (default: all): "
+                      "bvh, raycast, raster, whitted, path, radiosity, queries")
+    warm.add_argument("--jobs", type=int, metavar="N", help="processes at once (default: one per core)")
+    warm.add_argument("--quiet", action="store_true", help="print nothing")
+    warm.set_defaults(run=run_warmup)
+
     info = commands.add_parser("info", help="print what a scene holds")
     info.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
     info.set_defaults(run=run_info)
@@ -370,6 +380,18 @@ def _checkpointer(out: Path, every: float):
             last[0] = now
 
     return save
+
+
+def run_warmup(args: argparse.Namespace, started: float) -> int:
+    from . import warmup
+
+    try:
+        families = warmup.families_for(args.methods.split(",") if args.methods else None)
+    except ValueError as exc:
+        raise LumosError(f"--methods: {exc}") from None
+    if args.jobs is not None and args.jobs < 1:
+        raise LumosError("--jobs: give at least 1")
+    return warmup.main(families, jobs=args.jobs, quiet=args.quiet)
 
 
 def run_info(args: argparse.Namespace, started: float) -> int:

@@ -13,14 +13,58 @@ a render's figures exclude it, and calls `on_first` when the first compilation s
 from __future__ import annotations
 
 import contextlib
+import json
+import os
 import time
+from pathlib import Path
 from typing import Callable, Iterator, Optional
 
 from numba.core import event
 
-#: About how long a first run compiles, per method, on two cores (BENCHMARKS.md, time to first image, cold):
-#: the BVH builder (~11 s) and the method's kernels.
-ESTIMATE_S = {"raycast": 30, "raster": 25, "whitted": 40, "path": 45}
+#: About how long a first run compiles every kernel of a method, the BVH build included, on one of two cores
+#: (`benchmarks/bench_compile.py`, 2026-12-04), when no warm-up has measured it on this machine.
+ESTIMATE_S = {"raycast": 48, "raster": 57, "whitted": 79, "path": 57, "radiosity": 63}
+
+
+#: the file beside the kernels where `lumos warmup` keeps what each kernel family took to compile
+TIMINGS = "timings.json"
+
+
+def timings_path() -> Path:
+    from .kernels.cache import cache_dirs
+
+    return cache_dirs()[0] / TIMINGS
+
+
+def read_timings() -> dict:
+    """{family: {"compile_s": seconds}} of the last warm-up here that compiled each family."""
+    try:
+        return json.loads(timings_path().read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def save_timings(compile_s: dict) -> None:
+    """Record {family: seconds compiled} (a warm-up's), keeping the other families' figures."""
+    timings = read_timings()
+    timings.update({family: {"compile_s": round(s, 2)} for family, s in compile_s.items()})
+    try:
+        path = timings_path()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(timings, indent=1, sort_keys=True))
+        os.replace(tmp, path)
+    except OSError:
+        pass  # a read-only cache: estimates fall back to ESTIMATE_S
+
+
+def estimate_s(method: str) -> float:
+    """Seconds a first run of `method` compiles: what `lumos warmup` last measured here for the method's kernels
+    (its family: each method is one) and the BVH build, else ESTIMATE_S."""
+    timings = read_timings()
+    if method not in timings:
+        return ESTIMATE_S.get(method, 60)
+    return timings[method]["compile_s"] + timings.get("bvh", {}).get("compile_s", 0.0)
 
 
 class CompileWatch(event.Listener):

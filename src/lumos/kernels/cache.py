@@ -1,0 +1,306 @@
+"""Where compiled kernels are kept, and when they are stale.
+
+Numba's own cache stamps a function with the hash of its *own* file. A lumos kernel also inlines functions from
+other files, and reads constants (`layout`'s columns, `config`'s epsilons) from others again, so a change to any of
+those must recompile it, and a change to anything else must not. `KernelCache` stamps each kernel with the sha256
+of its **source closure** (`source_closure`): its own file, every lumos file that a name it reads comes from, and
+the closures of the kernels it calls, found from the code itself (the names each function's bytecode loads,
+resolved in its module). Editing `kernels/raster.py` leaves the path tracer's cache valid; editing
+`kernels/traverse.py` makes every ray method's stale. Numba's index also keys each entry on the signature, the CPU
+(name and features), the Numba version and the function's bytecode, so code compiled elsewhere is never loaded.
+
+The folders (`cache_dirs`), in the order they are read:
+
+    LUMOS_CACHE_DIR          if set, this folder alone (benchmarks use a fresh one to time a cold start), else
+    NUMBA_CACHE_DIR/lumos    if NUMBA_CACHE_DIR is set, this folder alone, else
+    <package>/_kernel_cache  if writable (the wheel that `pip install .` builds ships its kernels here), else
+    ~/.cache/lumos/kernels   (under XDG_CACHE_HOME if set) for a read-only install, written first and read first,
+                             then <package>/_kernel_cache read, so a read-only install still finds its kernels.
+
+Entries are written whole (Numba writes a temporary file and renames it) and the index of a function is updated
+under a file lock, so processes warming the same cache in parallel (`lumos warmup`) lose no entry.
+"""
+
+from __future__ import annotations
+
+import ast
+import contextlib
+import hashlib
+import os
+import sys
+import types
+from functools import lru_cache
+from pathlib import Path
+
+from numba.core.caching import CompileResultCacheImpl, FunctionCache, IndexDataCacheFile, _CacheLocator
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: index updates are then not locked (Numba's own behaviour)
+    fcntl = None
+
+#: the lumos package folder (the parent of `kernels/`)
+PACKAGE = Path(__file__).resolve().parent.parent
+_PACKAGE_NAME = __name__.split(".")[0]
+
+
+def packaged_dir() -> Path:
+    """The cache folder inside the installed package (filled when a wheel is built)."""
+    return PACKAGE / "_kernel_cache"
+
+
+def _writable(folder: Path) -> bool:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / f".probe-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+        return True
+    except OSError:
+        return False
+
+
+@lru_cache(maxsize=None)
+def _cache_dirs(lumos_dir: str, numba_dir: str) -> tuple[Path, ...]:
+    if lumos_dir:
+        return (Path(lumos_dir).expanduser().resolve(),)
+    if numba_dir:
+        return (Path(numba_dir).expanduser().resolve() / "lumos",)
+    packaged = packaged_dir()
+    if _writable(packaged):
+        return (packaged,)
+    user = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "lumos" / "kernels"
+    return (user, packaged)
+
+
+def cache_dirs() -> tuple[Path, ...]:
+    """The folders kernels are read from, the first also written to (see the module's docstring)."""
+    return _cache_dirs(os.environ.get("LUMOS_CACHE_DIR", ""), os.environ.get("NUMBA_CACHE_DIR", ""))
+
+
+# -- the source closure of a kernel ---------------------------------------------------------------------------
+
+def _loaded_names(code: types.CodeType) -> set[str]:
+    """Global and attribute names that `code` and the functions nested in it load."""
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            names |= _loaded_names(const)
+    return names
+
+
+@lru_cache(maxsize=None)
+def _import_table(path: str, ours: frozenset = frozenset({_PACKAGE_NAME})) -> dict[str, str]:
+    """name bound by an import in the module at `path` -> the lumos module it comes from ("lumos.kernels.layout"
+    for `from . import layout` and for `from .layout import MAT_KD`), so that a constant imported by value is
+    traced to its file."""
+    tree = ast.parse(Path(path).read_text(encoding="utf-8"))
+    package = _package_of(path)
+    table = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            base = package[: len(package) - node.level + 1] if node.level else []
+            module = ".".join(base + ([node.module] if node.module else []))
+            for alias in node.names:
+                submodule = f"{module}.{alias.name}"
+                table[alias.asname or alias.name] = submodule if submodule in sys.modules else module
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                table[alias.asname or alias.name.split(".")[0]] = alias.name
+    return {k: v for k, v in table.items() if v.split(".")[0] in ours}
+
+
+def _package_of(path: str) -> list[str]:
+    """The dotted package of the module file at `path`, as parts, found from the modules imported now."""
+    for name, module in list(sys.modules.items()):
+        if getattr(module, "__file__", None) and str(Path(module.__file__).resolve()) == str(Path(path).resolve()):
+            return name.split(".") if Path(path).name == "__init__.py" else name.split(".")[:-1]
+    return []
+
+
+def _module_file(name: str):
+    module = sys.modules.get(name)
+    path = getattr(module, "__file__", None)
+    return str(Path(path).resolve()) if path else None
+
+
+def _is_dispatcher(obj) -> bool:
+    return hasattr(obj, "py_func") and hasattr(obj, "overloads")
+
+
+def source_closure(py_func) -> set[str]:
+    """The source files a compiled `py_func` depends on (absolute paths): its own, the files of the names it
+    loads from lumos or its own package (functions, classes, modules, and constants imported by value), and
+    those of the kernels it calls, recursively."""
+    ours = {_PACKAGE_NAME, py_func.__module__.split(".")[0]}
+    files: set[str] = set()
+    seen: set[int] = set()
+    todo = [py_func]
+    while todo:
+        func = todo.pop()
+        if id(func) in seen:
+            continue
+        seen.add(id(func))
+        own = _module_file(func.__module__)
+        if own is None:
+            continue
+        files.add(own)
+        imports = _import_table(own, frozenset(ours))
+        names = _loaded_names(func.__code__)
+        cells = [c.cell_contents for c in (func.__closure__ or ()) if _cell_filled(c)]
+        values = [func.__globals__.get(n) for n in names] + cells
+        for name in names & imports.keys():  # a constant or function imported by name: its module's file
+            path = _module_file(imports[name])
+            if path:
+                files.add(path)
+        for value in values:
+            if _is_dispatcher(value):
+                todo.append(value.py_func)
+            elif isinstance(value, types.ModuleType) and value.__name__.split(".")[0] in ours:
+                if getattr(value, "__file__", None):
+                    files.add(str(Path(value.__file__).resolve()))
+                todo.extend(a.py_func for a in (getattr(value, n, None) for n in names) if _is_dispatcher(a))
+            elif isinstance(value, types.FunctionType) and value.__module__.split(".")[0] in ours:
+                todo.append(value)  # an @overload stub or a plain helper: its file, and what it loads
+            elif str(getattr(value, "__module__", "")).split(".")[0] in ours:
+                path = _module_file(value.__module__)  # a class (namedtuple layouts)
+                if path:
+                    files.add(path)
+    return files
+
+
+def _cell_filled(cell) -> bool:
+    try:
+        cell.cell_contents
+        return True
+    except ValueError:
+        return False
+
+
+@lru_cache(maxsize=None)
+def _file_digest(path: str, mtime_ns: int, size: int) -> bytes:
+    return hashlib.sha256(Path(path).read_bytes()).digest()
+
+
+def closure_stamp(py_func) -> str:
+    """sha256 over the (package-relative) names and contents of `source_closure(py_func)`."""
+    digest = hashlib.sha256()
+    for path in sorted(source_closure(py_func)):
+        st = os.stat(path)
+        rel = os.path.relpath(path, PACKAGE) if path.startswith(str(PACKAGE)) else "/".join(Path(path).parts[-2:])
+        digest.update(rel.encode() + b"\0" + _file_digest(path, st.st_mtime_ns, st.st_size))
+    return digest.hexdigest()
+
+
+# -- Numba's cache, with the closure stamp and lumos's folders ----------------------------------------------------
+
+class KernelLocator(_CacheLocator):
+    """Caches a lumos function under `<cache dir>/<its folder relative to the package>/`."""
+
+    def __init__(self, py_func, py_file):
+        self._py_func = py_func
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        folder = Path(py_file).resolve().parent
+        try:
+            self._subdir = folder.relative_to(PACKAGE)
+        except ValueError:  # code outside lumos made with lumos's decorators (tests, users' kernels): by module
+            self._subdir = Path("_other") / py_func.__module__
+        self._stamp = None
+
+    def paths(self) -> list[str]:
+        return [str(root / self._subdir) for root in cache_dirs()]
+
+    def get_cache_path(self):
+        return self.paths()[0]
+
+    def get_source_stamp(self):
+        if self._stamp is None:  # computed at the first load or save, once every module is imported
+            self._stamp = closure_stamp(self._py_func)
+        return self._stamp
+
+    def get_disambiguator(self):
+        return str(self._lineno)
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        return cls(py_func, py_file)
+
+
+class _KernelCacheImpl(CompileResultCacheImpl):
+    _locator_classes = [KernelLocator]
+
+
+class _LockedIndexFile(IndexDataCacheFile):
+    """Numba's index-and-data files, with the read-modify-write of the index under a lock on the folder."""
+
+    def save(self, key, data):
+        with _folder_lock(self._cache_path):
+            super().save(key, data)
+
+
+@contextlib.contextmanager
+def _folder_lock(folder: str):
+    if fcntl is None:
+        yield
+        return
+    with open(os.path.join(folder, ".lock"), "a+b") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+class KernelCache(FunctionCache):
+    """Numba's function cache, stamped with the source closure, read from every folder of `cache_dirs` and
+    written to the first; the stamp is computed when the cache is first used, not when the kernel is defined."""
+
+    _impl_class = _KernelCacheImpl
+
+    def __init__(self, py_func):  # Numba's __init__ stamps eagerly; everything else is Numba's
+        self._name = repr(py_func)
+        self._py_func = py_func
+        self._impl = self._impl_class(py_func)
+        self._files = None
+        self.enable()
+
+    @property
+    def cache_path(self):
+        return self._impl.locator.get_cache_path()
+
+    def _index_files(self) -> list[_LockedIndexFile]:
+        locator = self._impl.locator
+        paths = locator.paths()
+        if self._files is None or [f._cache_path for f in self._files] != paths:
+            stamp = locator.get_source_stamp()
+            self._files = [_LockedIndexFile(p, self._impl.filename_base, stamp) for p in paths]
+        return self._files
+
+    @property
+    def _cache_file(self):
+        return self._index_files()[0]
+
+    def _load_overload(self, sig, target_context):
+        if not self._enabled:
+            return None
+        key = self._index_key(sig, target_context.codegen())
+        for index in self._index_files():
+            data = index.load(key)
+            if data is not None:
+                return self._impl.rebuild(target_context, data)
+        return None
+
+    def _save_overload(self, sig, data):
+        try:
+            super()._save_overload(sig, data)
+        except OSError:
+            pass  # an unwritable cache folder: the kernel stays compiled for this process only
+
+
+def cached(dispatcher):
+    """Give a Numba dispatcher (compiled with `cache=False`) a `KernelCache`."""
+    dispatcher._cache = KernelCache(dispatcher.py_func)
+    return dispatcher
+
+

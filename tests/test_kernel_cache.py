@@ -1,0 +1,176 @@
+"""The kernel cache (`lumos.kernels.cache`) and `lumos warmup`: stamps over each kernel's source closure, a stale
+entry recompiled and never loaded, parallel writers losing nothing, and an installed package that needs no compile.
+
+The stamp tests build a tiny package of their own in tmp_path, with kernels made by lumos's own decorators, and run
+it in child processes (each a fresh Numba), counting Numba's compile events; each compile there takes milliseconds.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+import lumos
+from lumos.compiling import estimate_s, save_timings
+from lumos.kernels import cache
+
+PACKAGE = Path(lumos.__file__).resolve().parent
+
+CHILD = textwrap.dedent("""
+    import json, sys
+    from numba.core import event
+    sys.path.insert(0, sys.argv[1])
+    top = []
+    class Count(event.Listener):
+        depth = 0
+        def on_start(self, ev):
+            if Count.depth == 0:
+                top.append(ev.data["dispatcher"].py_func.__name__)
+            Count.depth += 1
+        def on_end(self, ev):
+            Count.depth -= 1
+    event.register("numba:compile", Count())
+    import ctpkg.a as a
+    import numpy as np
+    args = {"int": (3,), "float": (2.5,), "int32": (np.int32(3),), "float32": (np.float32(3),)}
+    for kind in sys.argv[2].split(","):
+        value = a.f(*args[kind])
+    print(json.dumps({"compiled": top, "value": float(value)}))
+""")
+
+
+def write_package(root: Path, g_body: str = "return x * 2", unrelated: str = "K = 1") -> None:
+    pkg = root / "ctpkg"
+    pkg.mkdir(exist_ok=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text(textwrap.dedent("""
+        from lumos.kernels.jit import njit
+        from .b import g, SCALE
+
+        @njit
+        def f(x):
+            return g(x) * SCALE
+    """))
+    (pkg / "b.py").write_text(textwrap.dedent(f"""
+        from lumos.kernels.jit import njit
+
+        SCALE = 10
+
+        @njit
+        def g(x):
+            {g_body}
+    """))
+    (pkg / "c.py").write_text(unrelated + "\n")
+
+
+def run_child(root: Path, cache_dir: Path, kinds: str = "int") -> dict:
+    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache_dir))
+    env.pop("NUMBA_CACHE_DIR", None)
+    proc = subprocess.run([sys.executable, "-c", CHILD, str(root), kinds], env=env, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_the_closure_of_a_kernel_holds_what_it_inlines_and_nothing_else():
+    from lumos.methods import path, raycast
+
+    def rel(kernel):
+        return {str(Path(p).relative_to(PACKAGE)) for p in cache.source_closure(kernel.py_func)}
+
+    ray, pt = rel(raycast._raycast_rows), rel(path._pass_rows)
+    for closure in (ray, pt):
+        assert {"kernels/traverse.py", "kernels/layout.py", "kernels/intersect.py", "config.py",
+                "kernels/jit.py"} <= closure
+        assert "kernels/raster.py" not in closure and "scene/model.py" not in closure
+    assert "methods/raycast.py" in ray and "methods/path.py" not in ray
+    assert {"methods/path.py", "kernels/sobol.py", "kernels/bsdf.py"} <= pt and "methods/raycast.py" not in pt
+
+
+def test_a_changed_source_byte_in_the_closure_recompiles_and_an_unrelated_one_does_not(tmp_path):
+    write_package(tmp_path)
+    cache_dir = tmp_path / "cache"
+    first = run_child(tmp_path, cache_dir)
+    assert first["compiled"] == ["f"] and first["value"] == 60.0
+    assert run_child(tmp_path, cache_dir)["compiled"] == []  # loaded
+    write_package(tmp_path, unrelated="K = 2")  # a file the kernel does not read
+    assert run_child(tmp_path, cache_dir)["compiled"] == []
+    write_package(tmp_path, g_body="return x * 3")  # the callee's file: the caller inlines it
+    changed = run_child(tmp_path, cache_dir)
+    assert changed["compiled"] == ["f"] and changed["value"] == 90.0  # new code, not the cached 60
+    write_package(tmp_path, g_body="return x * 3  ")  # one byte more, same meaning: still a recompile
+    assert run_child(tmp_path, cache_dir)["compiled"] == ["f"]
+
+
+def test_the_cache_moves_with_its_folder(tmp_path):
+    """Entries name no absolute path: a cache built in one place (the wheel's build folder) loads in another."""
+    write_package(tmp_path)
+    run_child(tmp_path, tmp_path / "built")
+    # same package bytes in a new place, the cache copied beside it: nothing compiles
+    moved = tmp_path / "moved"
+    moved.mkdir()
+    write_package(moved)
+    import shutil
+
+    shutil.copytree(tmp_path / "built", moved / "cache")
+    again = run_child(moved, moved / "cache")
+    assert again["compiled"] == [] and again["value"] == 60.0
+
+
+def test_parallel_writers_of_one_index_lose_no_entry(tmp_path):
+    """Four processes compile four signatures of one kernel into one index at once; a fifth loads all four."""
+    write_package(tmp_path)
+    cache_dir = tmp_path / "cache"
+    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache_dir))
+    env.pop("NUMBA_CACHE_DIR", None)
+    procs = [subprocess.Popen([sys.executable, "-c", CHILD, str(tmp_path), kind], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for kind in ("int", "float", "int32", "float32")]
+    for proc in procs:
+        out, err = proc.communicate(timeout=300)
+        assert proc.returncode == 0, err
+        assert json.loads(out.strip().splitlines()[-1])["compiled"] == ["f"]
+    assert run_child(tmp_path, cache_dir, "int,float,int32,float32")["compiled"] == []
+
+
+def test_cache_folders_follow_the_environment(tmp_path, monkeypatch):
+    monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path / "mine"))
+    assert cache.cache_dirs() == ((tmp_path / "mine").resolve(),)
+    monkeypatch.delenv("LUMOS_CACHE_DIR")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "nb"))
+    assert cache.cache_dirs() == ((tmp_path / "nb").resolve() / "lumos",)
+
+
+def test_the_compile_estimate_is_what_the_last_warmup_measured(tmp_path, monkeypatch):
+    monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path))
+    assert estimate_s("path") == 57  # nothing measured here yet: the table
+    save_timings({"path": 20.0, "bvh": 5.0})
+    save_timings({"raster": 30.0})  # a later warm-up of another family keeps the first's figures
+    assert estimate_s("path") == pytest.approx(25.0) and estimate_s("raster") == pytest.approx(35.0)
+
+
+def test_warmup_refuses_an_unknown_family(capsys):
+    from lumos import cli
+
+    assert cli.main(["warmup", "--methods", "raycast,nope"]) == 2
+    assert "unknown method or family 'nope'" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not cache.packaged_dir().is_dir() or "site-packages" not in str(PACKAGE),
+                    reason="lumos is not installed from a wheel (an editable install: run `lumos warmup`)")
+def test_an_installed_wheel_compiles_nothing(tmp_path):
+    """`pip install .` compiled every family into the package: warming again loads everything, compiles nothing."""
+    env = {k: v for k, v in os.environ.items() if k not in ("LUMOS_CACHE_DIR", "NUMBA_CACHE_DIR")}
+    proc = subprocess.run([sys.executable, "-m", "lumos", "warmup", "--jobs", "1"], env=env, capture_output=True,
+                          text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    from lumos.warmup import FAMILIES
+
+    lines = [line for line in proc.stderr.splitlines() if line.split()[1:2] and line.split()[1] in FAMILIES]
+    assert len(lines) == len(FAMILIES), proc.stderr
+    assert all("up to date" in line for line in lines), proc.stderr
