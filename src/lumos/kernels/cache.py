@@ -23,8 +23,8 @@ under a file lock, so processes warming the same cache in parallel (`lumos warmu
 
 from __future__ import annotations
 
-import ast
 import contextlib
+import dis
 import hashlib
 import os
 import sys
@@ -90,34 +90,36 @@ def _loaded_names(code: types.CodeType) -> set[str]:
 
 
 @lru_cache(maxsize=None)
-def _import_table(path: str, ours: frozenset = frozenset({_PACKAGE_NAME})) -> dict[str, str]:
-    """name bound by an import in the module at `path` -> the lumos module it comes from ("lumos.kernels.layout"
-    for `from . import layout` and for `from .layout import MAT_KD`), so that a constant imported by value is
-    traced to its file."""
-    tree = ast.parse(Path(path).read_text(encoding="utf-8"))
-    package = _package_of(path)
-    table = {}
-    for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom):
-            base = package[: len(package) - node.level + 1] if node.level else []
-            module = ".".join(base + ([node.module] if node.module else []))
-            for alias in node.names:
-                submodule = f"{module}.{alias.name}"
-                table[alias.asname or alias.name] = submodule if submodule in sys.modules else module
-        elif isinstance(node, ast.Import):
-            for alias in node.names:
-                table[alias.asname or alias.name.split(".")[0]] = alias.name
+def _import_table(path: str, module: str, ours: frozenset) -> dict[str, str]:
+    """name bound by a module-level import in `module` (whose file is `path`) -> the module it comes from
+    ("lumos.kernels.layout" for `from . import layout` and for `from .layout import MAT_KD`), for lumos's own
+    modules, so that a constant imported by value is traced to its file. Read from the module's bytecode (the
+    cached .pyc: quick), not its source."""
+    loader = getattr(getattr(sys.modules.get(module), "__spec__", None), "loader", None)
+    try:
+        code = loader.get_code(module)
+    except Exception:  # no loader that gives code (a frozen or built-in module): nothing imported to trace
+        return {}
+    package = module.split(".") if Path(path).name == "__init__.py" else module.split(".")[:-1]
+    table, consts, source, binding = {}, [None, None], None, None
+    for ins in dis.get_instructions(code):
+        if ins.opname == "LOAD_CONST":
+            consts = [consts[1], ins.argval]
+        elif ins.opname == "IMPORT_NAME":
+            level, name = consts[0] or 0, ins.argval
+            base = package[: len(package) - level + 1] if level else []
+            source = ".".join(base + ([name] if name else []))
+            binding = source if level or consts[1] else source.split(".")[0]  # `import a.b` binds a
+        elif ins.opname == "IMPORT_FROM" and source is not None:
+            sub = f"{source}.{ins.argval}"
+            binding = sub if sub in sys.modules else source
+        elif ins.opname in ("STORE_NAME", "STORE_GLOBAL") and binding is not None:
+            table[ins.argval] = binding
+            binding = None
     return {k: v for k, v in table.items() if v.split(".")[0] in ours}
 
 
-def _package_of(path: str) -> list[str]:
-    """The dotted package of the module file at `path`, as parts, found from the modules imported now."""
-    for name, module in list(sys.modules.items()):
-        if getattr(module, "__file__", None) and str(Path(module.__file__).resolve()) == str(Path(path).resolve()):
-            return name.split(".") if Path(path).name == "__init__.py" else name.split(".")[:-1]
-    return []
-
-
+@lru_cache(maxsize=None)
 def _module_file(name: str):
     module = sys.modules.get(name)
     path = getattr(module, "__file__", None)
@@ -145,7 +147,7 @@ def source_closure(py_func) -> set[str]:
         if own is None:
             continue
         files.add(own)
-        imports = _import_table(own, frozenset(ours))
+        imports = _import_table(own, func.__module__, frozenset(ours))
         names = _loaded_names(func.__code__)
         cells = [c.cell_contents for c in (func.__closure__ or ()) if _cell_filled(c)]
         values = [func.__globals__.get(n) for n in names] + cells
