@@ -300,9 +300,12 @@ class KernelCache(FunctionCache):
             pass  # an unwritable cache folder: the kernel stays compiled for this process only
 
 
-def cached(dispatcher):
-    """Give a Numba dispatcher (compiled with `cache=False`) a `KernelCache`."""
+def cached(dispatcher, prefix: str = ""):
+    """Give a Numba dispatcher (compiled with `cache=False`) a `KernelCache`; `prefix` names its entries apart
+    from another dispatcher's of the same function (Numba's index keys leave the compile options out)."""
     dispatcher._cache = KernelCache(dispatcher.py_func)
+    if prefix:
+        dispatcher._cache._impl._filename_base = f"{prefix}-{dispatcher._cache._impl._filename_base}"
     return dispatcher
 
 

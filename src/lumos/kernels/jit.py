@@ -5,18 +5,106 @@ antisymmetry of shared-edge tests), and "no hit yet" comparisons must not be fol
 """
 
 import numba
+from numba.core.codegen import JITCodeLibrary
+from numba.core.compiler import Compiler
+from numba.core.compiler_lock import require_global_compiler_lock
+from numba.core.registry import CPUDispatcher
 
 from .cache import cached
 
+# Device functions: what only other kernels call. Numba compiles every function it meets into a library of its
+# own: it generates a CPython and a C wrapper for it (code that unboxes every argument, every array of every
+# namedtuple), links in the libraries of its callees, optimises the whole (LLVM O3) and emits machine code, and
+# then each caller links those libraries in again and optimises and emits them again, so a function deep in the
+# call graph is optimised and emitted once per library above it. A device function here gets neither wrapper, and
+# its library is linked and given Numba's cheap module pipeline, but not the full one and no machine code: the
+# top-level kernel that links it in optimises everything fully once.
+# Device functions are therefore not cached on their own: each top-level kernel's cache entry holds its code.
+# benchmarks/bench_compile.py, every family from scratch: 365 -> 266 s of compiling, LLVM 219 -> 141 s
+# (`_raycast_rows` 33.4 -> 21.2 s); renders as fast, images identical (BENCHMARKS.md).
+_DEVICE = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
 
-def _cached_njit(**options):
+
+class DeviceLibrary(JITCodeLibrary):
+    """A device function's code: its IR (function passes run, as Numba does for every function) with its
+    callees' linked in, never optimised as a module nor emitted; only other libraries link it."""
+
+    def finalize(self):
+        require_global_compiler_lock()
+        self._raise_if_finalized()
+        seen = set()
+        for library in self._linking_libraries:
+            if library not in seen:
+                seen.add(library)
+                self._reload_init.update(library._reload_init)
+                self._final_module.link_in(library._get_module_for_linking(), preserve=True)
+        # Numba's cheap module pipeline (inlining and simplification), as it runs before its full one: the callee
+        # reaches its callers smaller, and their inliner takes it as it took the fully optimised one (A/B:
+        # without it the path tracer measured ~4% slower; with the full pipeline no faster than with this)
+        mpm, mpb = self._codegen._module_pass_manager(loop_vectorize=self._codegen._loopvect, slp_vectorize=False,
+                                                      opt=self._codegen._opt_level, cost="cheap")
+        mpm.run(self._final_module, mpb)
+        self._finalized = True
+
+    def get_pointer_to_function(self, name):
+        self._ensure_finalized()
+        return 0  # no machine code: Python calls go to the DeviceDispatcher's twin
+
+    @property
+    def codegen(self):
+        return _NoEnvCodegen(self._codegen)
+
+
+class _NoEnvCodegen:
+    """The shared codegen, except that a device library has no environment global of its own to set (its module
+    never reaches the JIT engine; Numba would write the address of the function's environment to address 0).
+    Device functions box nothing and call back into no Python object, so their copies never read it."""
+
+    def __init__(self, codegen):
+        self._codegen = codegen
+
+    def set_env(self, env_name, env):
+        pass
+
+    def __getattr__(self, name):
+        return getattr(self._codegen, name)
+
+
+class DeviceCompiler(Compiler):
+    """Numba's compiler pipeline, lowering into a `DeviceLibrary`."""
+
+    def __init__(self, typingctx, targetctx, library, args, return_type, flags, locals):
+        if library is None:
+            library = DeviceLibrary(targetctx.codegen(), "lumos_device")
+        super().__init__(typingctx, targetctx, library, args, return_type, flags, locals)
+
+
+class DeviceDispatcher(CPUDispatcher):
+    """A device function's dispatcher: jitted callers link its `DeviceLibrary`; a call from Python (tests, a
+    Python helper) goes to a twin compiled as an ordinary kernel (with wrappers, cached apart)."""
+
+    def __call__(self, *args, **kwargs):
+        twin = self.__dict__.get("_python_twin")
+        if twin is None:
+            options = {k: v for k, v in self.targetoptions.items() if k not in _DEVICE and k != "nopython"}
+            twin = self._python_twin = cached(numba.njit(cache=False, **options)(self.py_func), prefix="py")
+        return twin(*args, **kwargs)
+
+
+def _cached_njit(device=False, **options):
     """`numba.njit(**options)` whose dispatchers keep their code in lumos's kernel cache (`cache.KernelCache`:
-    stamped with each kernel's source closure, kept in the package or the user's cache folder)."""
+    stamped with each kernel's source closure, kept in the package or the user's cache folder), or with `device`
+    a `DeviceDispatcher` (see above; not cached on its own)."""
     compile_ = numba.njit(cache=False, **options)
 
     def decorate(py_func):
-        dispatcher = compile_(py_func)
-        return cached(dispatcher) if hasattr(dispatcher, "py_func") else dispatcher  # NUMBA_DISABLE_JIT=1
+        if not device:
+            dispatcher = compile_(py_func)
+            return cached(dispatcher) if hasattr(dispatcher, "py_func") else dispatcher  # NUMBA_DISABLE_JIT=1
+        if numba.config.DISABLE_JIT:
+            return py_func
+        return DeviceDispatcher(py_func=py_func, locals={}, targetoptions={"nopython": True, **options, **_DEVICE},
+                                pipeline_class=DeviceCompiler)
 
     return decorate
 
@@ -28,14 +116,14 @@ def _cached_njit(**options):
 #: quarter of the ray tracers' time (perf: NRT_incref, NRT_decref) and bounced shared counters between cores.
 #: (`_nrt` is the option Numba's own `register_jitable(_nrt=False)` uses.) Every decorator here states `_nrt` and
 #: `forceinline`: an option a function does not state is inherited from the caller being compiled.
-njit = _cached_njit(nogil=True, error_model="numpy", _nrt=False, forceinline=False)
+njit = _cached_njit(device=True, nogil=True, error_model="numpy", _nrt=False, forceinline=False)
 #: Device functions on the per-ray path that are inlined into their callers (LLVM alwaysinline). Numba passes
 #: every array of a namedtuple argument as its own fields (`closest_hit` takes 96 machine arguments,
 #: `illuminate_coeffs` 220), most of them on the stack, at each call that is not inlined.
-njit_inline = _cached_njit(nogil=True, error_model="numpy", _nrt=False, forceinline=True)
+njit_inline = _cached_njit(device=True, nogil=True, error_model="numpy", _nrt=False, forceinline=True)
 #: Helpers that allocate arrays (BVH build, raster bins, scratch buffers, csg crossing lists): with the runtime,
 #: said explicitly, since a function called from a device function would otherwise inherit its "no runtime".
-njit_alloc = _cached_njit(nogil=True, error_model="numpy", _nrt=True, forceinline=False)
+njit_alloc = _cached_njit(device=True, nogil=True, error_model="numpy", _nrt=True, forceinline=False)
 #: Top-level kernels run with prange over rows or tiles.
 njit_parallel = _cached_njit(nogil=True, parallel=True, error_model="numpy", _nrt=True,
                            forceinline=False)

@@ -1,0 +1,54 @@
+"""`kernels/jit.py`: device functions compile without wrappers into libraries that are linked, not emitted, and
+still answer calls from Python through a twin; top-level kernels hold their device functions' code."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba.core.codegen import JITCodeLibrary
+
+from lumos.kernels import vec
+from lumos.kernels.jit import DeviceDispatcher, DeviceLibrary, njit, njit_inline, njit_parallel, prange
+
+
+@njit
+def _scale(x, k):
+    return x * k
+
+
+@njit_inline
+def _shift(x, k):
+    return _scale(x, k) + 1.0
+
+
+@njit_parallel
+def _kernel(values, k, out):
+    for i in prange(values.shape[0]):
+        out[i] = _shift(values[i], k)
+
+
+def test_device_functions_are_device_dispatchers_and_top_level_kernels_are_not():
+    assert isinstance(_scale, DeviceDispatcher) and isinstance(_shift, DeviceDispatcher)
+    assert isinstance(vec.dot, DeviceDispatcher)
+    assert not isinstance(_kernel, DeviceDispatcher)
+
+
+def test_a_kernel_links_its_device_functions_and_computes_with_them(tmp_path, monkeypatch):
+    monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path))
+    values = np.linspace(-2.0, 3.0, 101)
+    out = np.empty_like(values)
+    _kernel(values, 2.5, out)
+    np.testing.assert_array_equal(out, values * 2.5 + 1.0)
+    # the device functions were compiled for the kernel into libraries that only get linked: no machine code
+    (shift_cres,) = _shift.overloads.values()
+    assert isinstance(shift_cres.library, DeviceLibrary)
+    assert isinstance(next(iter(_kernel.overloads.values())).library, JITCodeLibrary)
+    assert not isinstance(next(iter(_kernel.overloads.values())).library, DeviceLibrary)
+
+
+def test_a_device_function_called_from_python_runs_a_wrapped_twin():
+    a, b = np.array([1.0, 2.0, 3.0]), np.array([-2.0, 0.5, 4.0])
+    assert vec.dot(a, b) == np.dot(a, b)
+    assert _shift(2.0, 3.0) == 7.0
+    twin = _shift.__dict__["_python_twin"]
+    assert not isinstance(twin, DeviceDispatcher)
+    assert all(not isinstance(c.library, DeviceLibrary) for c in twin.overloads.values())
