@@ -10,8 +10,9 @@ one; the ratio of each round's two times cancels the drift that both see. Report
 each and the median of the per-round ratios (work / base, below 1 is faster), and whether the last round's two
 images are the same.
 
-Both compile into a fresh temporary NUMBA_CACHE_DIR (about a minute and a half each): lumos's stale-cache guard
-(`kernels.jit`) would otherwise wipe the other version's cached kernels, or yours.
+Both compile into a fresh temporary NUMBA_CACHE_DIR (about a minute each), so neither loads kernels the other or an
+earlier run cached. The second version in one process can read a few per cent slower for identical code (an A/A
+run of whitted read 1.06): for effects that small, `ab_process.py` runs each version in processes of its own.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def _package(tree: Path, name: str, source: Path | None = None, rev: str | None = None) -> None:
+def package_tree(tree: Path, name: str, source: Path | None = None, rev: str | None = None) -> None:
     """lumos's source, from the working tree or a revision, as package `name` in `tree`."""
     target = tree / name
     if rev is None:
@@ -64,8 +65,8 @@ def main() -> None:
     tree = Path(tempfile.mkdtemp(prefix="lumos-ab-"))
     try:
         os.environ["NUMBA_CACHE_DIR"] = str(tree / "numba_cache")  # before numba is imported
-        _package(tree, "lumos_base", rev=args.rev)
-        _package(tree, "lumos_work", source=ROOT / "src" / "lumos")
+        package_tree(tree, "lumos_base", rev=args.rev)
+        package_tree(tree, "lumos_work", source=ROOT / "src" / "lumos")
         sys.path.insert(0, str(tree))
         versions = {name: importlib.import_module(f"lumos_{name}") for name in ("base", "work")}
         scenes = {name: module.load_scene(args.scene) for name, module in versions.items()}
