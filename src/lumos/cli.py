@@ -469,7 +469,7 @@ def run_sheet(args: argparse.Namespace, started: float) -> int:
         failed = sum(cell["image"] is None for cell in cells)
         count += f", {failed} not rendered (the cells say why)" if failed else ""
         print(f"lumos: sheet of {count} ({first['width']}x{first['height']}), {time.perf_counter() - started:.2f} s "
-              f"(compile {image.info['compile_s']:.2f} s) -> {out}", file=sys.stderr)
+              f"(warm-up {image.info['compile_s']:.2f} s) -> {out}", file=sys.stderr)
     return 0
 
 

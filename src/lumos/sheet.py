@@ -10,7 +10,7 @@ side in one labelled grid image, the figure the textbook asks readers to make.
 Layout, in pixels (`layout` computes it; every column is `slot_w` wide, every row `cell_h + caption_h`):
 
     MARGIN  title: the scene file name
-            info:  320x240 · 1 spp · compile 1.23 s
+            info:  320x240 · 1 spp · warm-up 1.23 s
     MARGIN  cell  MARGIN  cell  MARGIN  ...   (up to `columns` cells a row)
             label          label
             time           time
@@ -22,7 +22,7 @@ Layout, in pixels (`layout` computes it; every column is `slot_w` wide, every ro
 
 Each cell is the render's PNG encoding (`film.to_png8`, the path `Image.save` takes), pixel for pixel. Before
 the timed renders each (method, shading) pair is rendered once at WARMUP_SIZE, so a cell's time is its render
-alone, not Numba compiling (or loading from its cache) the kernel; that warm-up is the `compile` time of the
+alone, not Numba compiling (or loading from its cache) the kernel; that warm-up is the `warm-up` time of the
 info line, shared by all cells.
 
 With a reference cell (`--reference whitted`, `raster:phong`...), every other rendered cell is compared with it
@@ -227,7 +227,7 @@ def make_sheet(scene, entries: Optional[list[tuple[str, dict]]] = None, columns:
     cfg = configs[0]
     same_size = all((c.width, c.height) == (cfg.width, cfg.height) for c in configs)
     info = [f"{cfg.width}x{cfg.height}" if same_size else "", f"{cfg.spp} spp" if same_size else "",
-            f"compile {format_seconds(compile_s)}" if compile_s is not None else "",
+            f"warm-up {format_seconds(compile_s)}" if compile_s is not None else "",
             f"errors against {cells[ref]['label']}" if ref is not None else ""]
     sheet = compose_sheet(cells, columns, title=title, info=" · ".join(part for part in info if part), diff=diff)
     sheet.info["compile_s"] = compile_s
@@ -356,7 +356,7 @@ def _warm_up(scene, jobs: list[dict], progress: bool, say) -> float:
         key = (job["method"], job.get("shading"))
         if key not in seen:
             seen.add(key)
-            say(f"compiling {job['method']}" + (f" ({job['shading']})" if job.get("shading") else ""))
+            say(f"warming up {job['method']}" + (f" ({job['shading']})" if job.get("shading") else ""))
             try:
                 api.render(scene, progress, **{**job, "width": WARMUP_SIZE, "height": WARMUP_SIZE, "spp": 1})
             except LumosError:
