@@ -2,7 +2,7 @@
 
     lumos warmup                          # every family, in parallel processes, with a progress bar
     lumos warmup --methods raycast,path   # only these families
-    warmup.run(["path"], jobs=1)          # from Python: {family: FamilyResult}
+    warmup.run(["path"], jobs=1)          # from Python: a FamilyResult per family
 
 A *family* is the set of kernels one method reaches (`FAMILIES`): each is warmed by rendering small built-in
 scenes (no files needed, so the wheel build can run it) in a process of its own, so that families compile side by
@@ -31,7 +31,7 @@ FAMILIES = {
     "radiosity": "radiosity: form factors, the solver, the display",
     "queries": "lumos.RayCaster's ray queries",
 }
-#: families compiled before the others, in this process or one of its own (the others load what they share)
+#: families compiled first, in this process (the others, in their own processes, load what they share)
 FIRST = ("bvh",)
 SMALL = {"width": 48, "height": 36, "spp": 1}
 

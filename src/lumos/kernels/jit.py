@@ -27,7 +27,8 @@ _DEVICE = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
 
 class DeviceLibrary(JITCodeLibrary):
     """A device function's code: its IR (function passes run, as Numba does for every function) with its
-    callees' linked in, never optimised as a module nor emitted; only other libraries link it."""
+    callees' linked in and Numba's cheap module pipeline run over it, never emitted; only other libraries link
+    it."""
 
     def finalize(self):
         require_global_compiler_lock()
@@ -109,7 +110,8 @@ def _cached_njit(device=False, **options):
     return decorate
 
 
-#: Device functions (intersection, traversal, shading: everything on the per-ray path), cached on disk. They are
+#: Device functions (intersection, traversal, shading: everything on the per-ray path), linked into the kernels that
+#: call them (`DeviceLibrary` above). They are
 #: compiled without Numba's runtime (NRT): they allocate nothing, and their callers own every array they see, so
 #: they need no reference counts. With the runtime, each call that is not inlined increments and decrements the
 #: count of every array in its tuple arguments (30 calls on entry and 30 on exit for `whitted.trace`), which took a
