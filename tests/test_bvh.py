@@ -471,3 +471,30 @@ def test_axis_aligned_rays_through_bvh():
     d = [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]]
     t, _, _ = trace(arrays, o, d)
     np.testing.assert_array_equal(t, [6.5, 5.0, 3.5, 7.5, 5.0])
+
+
+def test_large_tree_built_in_tasks_is_the_same_on_any_number_of_threads(rng):
+    """Above 4096 primitives the top of the tree is built first and its subtrees as tasks on Python threads
+    (`compile.bvh.build`), each into a region of its own, closed up in task order: the same tree on 1, 2 or 3
+    threads, and every invariant holds across the seams between the top and the tasks' regions."""
+    from lumos.compile.bvh import build
+
+    n_tri = 6000
+    centers = rng.uniform(-4.5, 4.5, (n_tri, 1, 3))
+    tris = _f32(centers + rng.normal(scale=0.1, size=(n_tri, 3, 3)))
+    bounds = np.concatenate([tris.min(axis=1), tris.max(axis=1)], axis=1)
+    one = build(bounds, threads=1)
+    for threads in (2, 3):
+        for a, b in zip(one, build(bounds, threads=threads)):
+            np.testing.assert_array_equal(a, b)
+    scene = {"objects": [{"type": "mesh", "vertices": tris.reshape(-1, 3).tolist(),
+                          "faces": np.arange(3 * n_tri).reshape(-1, 3).tolist(), "material": MAT}]}
+    compiled = compile_dict(scene)
+    assert check_tree(compiled, _prim_boxes(scene, compiled.arrays)) >= 10
+    check_wide_tree(compiled.arrays, _prim_boxes(scene, compiled.arrays))
+    o, d = random_rays(rng, 300, tris)
+    t_k, _, _ = trace(compiled.arrays, o, d)
+    best = brute_force(scene, tris, o, d)[0].min(axis=0)
+    hit = np.isfinite(best)
+    assert 0.2 < hit.mean() and np.array_equal(t_k >= 0.0, hit)
+    np.testing.assert_allclose(t_k[hit], best[hit], rtol=1e-9)

@@ -7,7 +7,8 @@ import numpy as np
 from numba.core.codegen import JITCodeLibrary
 
 from lumos.kernels import vec
-from lumos.kernels.jit import DeviceDispatcher, DeviceLibrary, njit, njit_inline, njit_parallel, prange
+from lumos.kernels.jit import DeviceDispatcher, DeviceLibrary, njit, njit_inline, njit_serial
+from lumos.kernels.threads import parallel_for
 
 
 @njit
@@ -20,9 +21,9 @@ def _shift(x, k):
     return _scale(x, k) + 1.0
 
 
-@njit_parallel
-def _kernel(values, k, out):
-    for i in prange(values.shape[0]):
+@njit_serial
+def _kernel(values, k, out, i0, i1):
+    for i in range(i0, i1):
         out[i] = _shift(values[i], k)
 
 
@@ -36,7 +37,7 @@ def test_a_kernel_links_its_device_functions_and_computes_with_them(tmp_path, mo
     monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path))
     values = np.linspace(-2.0, 3.0, 101)
     out = np.empty_like(values)
-    _kernel(values, 2.5, out)
+    parallel_for(lambda i0, i1: _kernel(values, 2.5, out, i0, i1), 0, len(values), threads=2)
     np.testing.assert_array_equal(out, values * 2.5 + 1.0)
     # the device functions were compiled for the kernel into libraries that only get linked: no machine code
     (shift_cres,) = _shift.overloads.values()

@@ -5,24 +5,20 @@ axes in one pass; the split with the least surface-area cost is taken; the index
 and the same pass gathers both children's centroid bounds (their boxes come from the bins). The two children of
 a node are stored next to each other, so traversal tests both boxes from one cache line.
 
-Parallelism: the top of the tree is built first (large nodes bin in parallel chunks); every node below
-`task_size` primitives becomes a task, the tasks are built in parallel into their own node regions
-(a subtree of n primitives needs at most 2n − 1 nodes), and the regions are compacted at the end.
+Parallelism: the top of the tree is built first; every node below `task_size` primitives becomes a task, and the
+tasks are built into their own node regions (a subtree of n primitives needs at most 2n − 1 nodes), which are
+compacted at the end. `build_nodes` builds a run of tasks and releases the GIL, so `compile.bvh.build` runs the
+tasks on Python threads. (As `parallel=True` kernels the builder took 16 s to compile, against 10 s now: Numba
+optimises each parallel loop body, with everything inlined into it, as a module of its own; the tree is the same.)
 """
 
 import numpy as np
 
-from .jit import njit_alloc, njit_parallel, prange
+from .jit import njit_alloc, njit_serial
 from .layout import LEAF_PACKED, WIDE
 
 #: Trees deeper than this make leaves (the traversal stack, `config.BVH_STACK`, is sized for this depth).
 MAX_DEPTH = 60
-#: Nodes with at least this many primitives bin in parallel chunks.
-PARALLEL_MIN = 1 << 16
-_CHUNKS = 16
-# Integer arguments go through np.int64: Numba would otherwise type each constant as a literal and compile
-# _build_from once per call site (it is the largest function here: ~10 s of compile each time).
-i64 = np.int64
 
 
 @njit_alloc
@@ -64,25 +60,6 @@ def _bin_range(order, start, end, bounds, cent, cbox, scale, first_shape, bin_bo
             b = min(max(b, 0), n_bins - 1)
             bin_count[a, b] += w
             _grow(bin_box[a, b], bounds[p])
-
-
-@njit_parallel
-def _bin_parallel(order, start, end, bounds, cent, cbox, scale, first_shape, bin_box, bin_count):
-    n_bins = bin_count.shape[1]
-    boxes = np.empty((_CHUNKS, 3, n_bins, 6))
-    counts = np.zeros((_CHUNKS, 3, n_bins), np.int64)
-    step = (end - start + _CHUNKS - 1) // _CHUNKS
-    for c in prange(_CHUNKS):
-        _reset(boxes[c])
-        lo = start + c * step
-        hi = min(end, lo + step)
-        if lo < hi:
-            _bin_range(order, lo, hi, bounds, cent, cbox, scale, first_shape, boxes[c], counts[c])
-    for c in range(_CHUNKS):
-        for a in range(3):
-            for b in range(n_bins):
-                bin_count[a, b] += counts[c, a, b]
-                _grow(bin_box[a, b], boxes[c, a, b])
 
 
 @njit_alloc
@@ -181,7 +158,7 @@ def _store_box(node_box, node, box):
 
 @njit_alloc
 def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order, bounds, cent, first_shape, max_leaf,
-                n_bins, cost_traversal, task_size, parallel_min, node_box, node_link, tasks, n_tasks):
+                n_bins, cost_traversal, task_size, node_box, node_link, tasks, n_tasks):
     """Build the subtree of node `root` over order[start:end], allocating nodes from `first_free` upward.
 
     Nodes with fewer than `task_size` primitives (when > 0) are not built but appended to `tasks` as
@@ -227,10 +204,7 @@ def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order,
                 scale[a] = n_bins / ext * (1.0 - 1e-9) if ext > 0.0 else 0.0
             _reset(bin_box)
             bin_count[:] = 0
-            if count >= parallel_min:
-                _bin_parallel(order, start, end, bounds, cent, cbox, scale, first_shape, bin_box, bin_count)
-            else:
-                _bin_range(order, start, end, bounds, cent, cbox, scale, first_shape, bin_box, bin_count)
+            _bin_range(order, start, end, bounds, cent, cbox, scale, first_shape, bin_box, bin_count)
             cost, axis, split = _best_split(bin_box, bin_count, cbox, right_area, acc)
             weight = bin_count[0].sum()
         # stage 2: a leaf when splitting does not pay (SAH) or is impossible; a leaf holds at most max_leaf
@@ -271,89 +245,26 @@ def _build_from(root, start, end, depth, root_box, root_cbox, first_free, order,
     return next_free, n_tasks, max_depth
 
 
-@njit_parallel
-def _build_tasks(tasks, bases, order, bounds, cent, first_shape, max_leaf, n_bins, cost_traversal, node_box,
-                 node_link, ends, depths):
-    for k in prange(tasks.shape[0]):
-        node, start, end, depth = tasks[k, 0], tasks[k, 1], tasks[k, 2], tasks[k, 3]
-        box = np.empty(6)
-        cbox = np.empty(6)
-        _range_bounds(order, start, end, bounds, cent, box, cbox)
-        ends[k], _, depths[k] = _build_from(node, start, end, depth, box, cbox, bases[k], order, bounds, cent,
-                                            first_shape, max_leaf, n_bins, cost_traversal, i64(0), i64(1 << 62),
-                                            node_box, node_link, tasks, i64(0))
+@njit_serial
+def build_nodes(tasks, bases, k0, k1, order, bounds, cent, first_shape, max_leaf, n_bins, cost_traversal, task_size,
+                node_box, node_link, ends, depths, new_tasks):
+    """Build the subtrees of tasks[k0:k1] (rows (node, start, end, depth) over order[start:end]), task k's nodes
+    from bases[k] upward, into node_box float32 (nn, 6) and node_link int32 (nn, 2) (see `_build_from`); ends[k]
+    and depths[k] get the node after its last and its deepest level.
 
-
-@njit_alloc
-def build_bvh(bounds, first_shape, max_leaf, n_bins, cost_traversal):
-    """Build a BVH over primitive boxes `bounds` float64 (n, 6) (min xyz, max xyz); n >= 1. Primitives from
-    `first_shape` on are analytic shapes, before it triangles (the SAH weighs them apart: `_weight`).
-
-    `cost_traversal` is the SAH cost of a traversal step relative to one primitive test; leaves hold at most
-    `max_leaf` of primitive weight (`_weight`: triangles, or a single shape; more only where the depth limit
-    forces it).
-
-    Returns (node_box float32 (nn, 6), node_link int32 (nn, 2), order int64 (n,), depth). Interior nodes link to
-    their first child (the second follows it); a leaf's primitives are order[first:first + count].
-    """
-    n = bounds.shape[0]
-    order = np.arange(n)
-    cent = (bounds[:, :3] + bounds[:, 3:]) * 0.5
-    capacity = 2 * n + 2
-    node_box = np.empty((capacity, 6), np.float32)
-    node_link = np.zeros((capacity, 2), np.int32)
+    With `task_size` > 0, nodes below that many primitives are not built but appended to `new_tasks`; returns how
+    many were. The whole tree is the root task (0, 0, n, 0) with base 2, built with a task size and then its
+    tasks without: `compile.bvh.build` does that, the tasks on threads."""
     box = np.empty(6)
     cbox = np.empty(6)
-    _range_bounds(order, 0, n, bounds, cent, box, cbox)
-    # the top of the tree, sequentially; small subtrees become tasks
-    task_size = max(1024, n // 64)
-    # big nodes (>= task_size) number at most (2n/task_size)·MAX_DEPTH; each yields at most two tasks
-    tasks = np.empty((2 * (2 * (n // task_size) + 2) * (MAX_DEPTH + 1), 4), np.int64)
-    # node 1 is padding: sibling pairs then start at even indices, so a pair of 32-byte nodes fills one cache line
-    node_box[1] = 0.0
-    top_end, n_tasks, depth = _build_from(i64(0), i64(0), i64(n), i64(0), box, cbox, i64(2), order, bounds, cent,
-                                          first_shape, max_leaf, n_bins, cost_traversal,
-                                          i64(task_size if n >= 4 * task_size else 0), i64(PARALLEL_MIN), node_box,
-                                          node_link, tasks, i64(0))
-    if n_tasks == 0:
-        return node_box[:top_end].copy(), node_link[:top_end].copy(), order, depth
-    # the subtrees, in parallel, each into its own region of the node arrays
-    tasks = tasks[:n_tasks]
-    bases = np.empty(n_tasks, np.int64)
-    base = top_end
-    for k in range(n_tasks):
-        bases[k] = base
-        base += 2 * (tasks[k, 2] - tasks[k, 1])
-    big_box = np.empty((base, 6), np.float32)
-    big_link = np.zeros((base, 2), np.int32)
-    big_box[:top_end] = node_box[:top_end]
-    big_link[:top_end] = node_link[:top_end]
-    ends = np.empty(n_tasks, np.int64)
-    depths = np.empty(n_tasks, np.int64)
-    _build_tasks(tasks, bases, order, bounds, cent, first_shape, max_leaf, n_bins, cost_traversal, big_box, big_link,
-                 ends, depths)
-    # compact: close the gaps between regions, shifting child links that point into a region
-    shift = np.zeros(n_tasks, np.int64)
-    total = top_end
-    for k in range(n_tasks):
-        shift[k] = bases[k] - total
-        total += ends[k] - bases[k]
-        depth = max(depth, depths[k])
-    out_box = np.empty((total, 6), np.float32)
-    out_link = np.empty((total, 2), np.int32)
-    out_box[:top_end] = big_box[:top_end]
-    out_link[:top_end] = big_link[:top_end]
-    for k in range(n_tasks):
-        root = tasks[k, 0]
-        if big_link[root, 1] == 0:
-            out_link[root, 0] = big_link[root, 0] - shift[k]
-        lo, hi = bases[k], ends[k]
-        for i in range(lo, hi):
-            j = i - shift[k]
-            out_box[j] = big_box[i]
-            out_link[j, 1] = big_link[i, 1]
-            out_link[j, 0] = big_link[i, 0] - shift[k] if big_link[i, 1] == 0 else big_link[i, 0]
-    return out_box, out_link, order, depth
+    n_new = 0
+    for k in range(k0, k1):
+        node, start, end, depth = tasks[k, 0], tasks[k, 1], tasks[k, 2], tasks[k, 3]
+        _range_bounds(order, start, end, bounds, cent, box, cbox)
+        ends[k], n_new, depths[k] = _build_from(node, start, end, depth, box, cbox, bases[k], order, bounds, cent,
+                                                first_shape, max_leaf, n_bins, cost_traversal, task_size, node_box,
+                                                node_link, new_tasks, n_new)
+    return n_new
 
 
 # ------------------------------------------------------------------------------------------- the wide tree

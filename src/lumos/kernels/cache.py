@@ -133,9 +133,9 @@ def _is_dispatcher(obj) -> bool:
 def source_closure(py_func) -> set[str]:
     """The source files a compiled `py_func` depends on (absolute paths): its own, the files of the names it
     loads from lumos or its own package (functions, classes, modules, and constants imported by value), and
-    those of the kernels it calls, recursively."""
+    those of the kernels it calls, recursively; and always `kernels/jit.py`, which holds the compile options."""
     ours = {_PACKAGE_NAME, py_func.__module__.split(".")[0]}
-    files: set[str] = set()
+    files: set[str] = {str(Path(__file__).resolve().with_name("jit.py"))}
     seen: set[int] = set()
     todo = [py_func]
     while todo:

@@ -51,7 +51,8 @@ import math
 
 import numpy as np
 
-from .jit import njit, njit_alloc, njit_inline, njit_parallel, prange
+from .jit import njit, njit_alloc, njit_inline, njit_serial
+from .threads import parallel_for
 from .raster import MAX_VERTS, edge_scratch, fill_polygon, first_covered_row, setup_edges
 from .vec import orthonormal_basis
 
@@ -60,7 +61,7 @@ N_FACES = 5
 #: The pixel sample point within a pixel: its centre, where the ΔF table is evaluated.
 _JX = 0.5
 _JY = 0.5
-#: Points per parallel task in `form_factor_matrix` (the scratch buffers are allocated once per task).
+#: Points per run of `form_factor_matrix` handed to a thread (the scratch buffers are allocated once per run).
 _CHUNK = 8
 
 
@@ -315,10 +316,10 @@ def form_factors_from_point(x, n, phi, skip_poly, verts, polys, poly_normal, sid
     return out
 
 
-@njit_parallel
 def form_factor_matrix(points, normals, phis, skip_polys, verts, polys, poly_normal, side_patch, dF, near, out):
     """Rows of form factors for the full-matrix solvers: out[i, j] = the hemicube form factor from point i to
-    patch j (row i from point/patch i to every patch). Parallel over points; each task has its own scratch.
+    patch j (row i from point/patch i to every patch). Runs of _CHUNK points go to threads
+    (`threads.parallel_for`), each run with its own scratch.
 
     points, normals float64 (n_points, 3): the points (offset off their surfaces) and their unit normals
     phis       float64 (n_points,): each hemicube's rotation about its normal (radians)
@@ -326,11 +327,17 @@ def form_factor_matrix(points, normals, phis, skip_polys, verts, polys, poly_nor
     verts, polys, poly_normal, side_patch, dF, near: as in `hemicube_form_factors`
     out        float32 (n_points, n_patches): overwritten
     """
+    parallel_for(lambda c0, c1: _ff_chunks(points, normals, phis, skip_polys, verts, polys, poly_normal, side_patch,
+                                           dF, near, out, c0, c1), 0, -(-points.shape[0] // _CHUNK))
+
+
+@njit_serial
+def _ff_chunks(points, normals, phis, skip_polys, verts, polys, poly_normal, side_patch, dF, near, out, c0, c1):
     n_points = points.shape[0]
     n_patches = out.shape[1]
-    for chunk in prange((n_points + _CHUNK - 1) // _CHUNK):
-        scratch = hemicube_scratch(dF.shape[1])
-        row = np.empty(n_patches)
+    scratch = hemicube_scratch(dF.shape[1])
+    row = np.empty(n_patches)
+    for chunk in range(c0, c1):
         for i in range(chunk * _CHUNK, min(n_points, (chunk + 1) * _CHUNK)):
             row[:] = 0.0
             hemicube_form_factors((points[i, 0], points[i, 1], points[i, 2]),

@@ -126,7 +126,10 @@ njit_inline = _cached_njit(device=True, nogil=True, error_model="numpy", _nrt=Fa
 #: Helpers that allocate arrays (BVH build, raster bins, scratch buffers, csg crossing lists): with the runtime,
 #: said explicitly, since a function called from a device function would otherwise inherit its "no runtime".
 njit_alloc = _cached_njit(device=True, nogil=True, error_model="numpy", _nrt=True, forceinline=False)
-#: Top-level kernels run with prange over rows or tiles.
-njit_parallel = _cached_njit(nogil=True, parallel=True, error_model="numpy", _nrt=True,
-                           forceinline=False)
-prange = numba.prange
+#: Top-level kernels: called from Python, over a range of rows (or rays, chunks, tasks), serially, with the GIL
+#: released, so that `threads.parallel_for` runs several at once on Python threads. (Not `parallel=True`: Numba
+#: optimises each `prange` body apart from its kernel, which doubled LLVM's share of the compile; see `threads`.)
+#: A kernel that reads the scene through views (`views.geometry_of`...) builds them in a device function it calls,
+#: never itself: the views hold no references, and a kernel with Numba's runtime would release them (BENCHMARKS:
+#: `views.owned_views` in the kernel instead made ray casting 27% slower).
+njit_serial = _cached_njit(nogil=True, error_model="numpy", _nrt=True, forceinline=False)

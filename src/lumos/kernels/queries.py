@@ -1,6 +1,6 @@
 """Kernels of the ray-query API (`lumos.RayCaster`): closest hits with their surface, every crossing of a ray,
-and camera rays for picked pixels. All are `prange` loops over chunks of rays, each chunk with its own fixed
-traversal stack and scratch buffers; each ray's answer depends on that ray alone (deterministic, any thread
+and camera rays for picked pixels. Each runs over runs of rays on threads (`threads.parallel_for`), each run with
+its own fixed traversal stack and scratch buffers; each ray's answer depends on that ray alone (deterministic, any thread
 count), and the GIL is released.
 
 Every crossing (`crossings`): the ray's line is clipped to the scene's (padded) bounds [t0, t1], outside which
@@ -33,7 +33,7 @@ from .intersect import (
     intersect_triangle,
     triangle_setup,
 )
-from .jit import njit, njit_inline, njit_parallel, prange
+from .jit import njit, njit_inline, njit_serial
 from .layout import (
     FLAG_CAPPED,
     FLAG_UVS,
@@ -58,6 +58,7 @@ from .simd import wide_box_mask, wide_setup
 from .surface import surface_at
 from .traverse import closest_hit, leaf_of, packed_leaf, push_children
 from .vec import cross, madd, normalize, xform_point, xform_vector
+from .threads import parallel_for
 from .views import geometry_of, surfaces_of
 
 _CHUNK = 256
@@ -93,47 +94,58 @@ def bad_rays(origins, directions):
 # ------------------------------------------------------------------------------------------- closest hits
 
 
-@njit_parallel
 def closest_kernel(sa, tri_prim, origins, directions, t_max, t_out, object_out, prim_out, point_out, normal_out,
                    uv_out):
     """Nearest hit of each ray (float64 (n, 3) origins and directions, t_max (n,)) with its surface: t_out (n,)
     (inf on a miss), object_out / prim_out int64 (n,) (-1 on a miss), point_out / normal_out (n, 3) and uv_out
-    (n, 2) (NaN on a miss). The normal is the unit geometric normal, outward (not turned towards the ray)."""
-    n = origins.shape[0]
-    for c in prange((n + _CHUNK - 1) // _CHUNK):
-        geo, surf = geometry_of(sa), surfaces_of(sa)  # per task: parfor bodies cannot capture a namedtuple
-        stack = np.empty(config.BVH_STACK, np.int64)
-        stack_t = np.empty(config.BVH_STACK)
-        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
-            o = (origins[i, 0], origins[i, 1], origins[i, 2])
-            d = (directions[i, 0], directions[i, 1], directions[i, 2])
-            t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, t_max[i], stack, stack_t, 0.0)
-            if t == NO_HIT:
-                t_out[i] = np.inf
-                object_out[i] = -1
-                prim_out[i] = -1
-                for k in range(3):
-                    point_out[i, k] = np.nan
-                    normal_out[i, k] = np.nan
-                uv_out[i, 0] = np.nan
-                uv_out[i, 1] = np.nan
-                continue
-            if ref >= 0 and part >= 0:  # a triangle of a packed leaf: its record is in the row just tested
-                p, n_geo, u, v, obj, prim = _packed_record(geo, surf, o, d, t, ref, b1, b2, part)
-            elif ref >= 0:  # another triangle: only what the hit record holds (no shading normal)
-                p, n_geo, u, v, obj = _triangle_record(surf, o, d, t, ref, b1, b2)
-                prim = np.int64(tri_prim[ref])
-            else:
-                p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
-                prim = _prim_of(sa, tri_prim, ref, part)
-            t_out[i] = t
-            object_out[i] = obj
-            prim_out[i] = prim
+    (n, 2) (NaN on a miss). The normal is the unit geometric normal, outward (not turned towards the ray).
+    Runs of rays go to threads (`threads.parallel_for`)."""
+    parallel_for(lambda i0, i1: _closest_rays(sa, tri_prim, origins, directions, t_max, t_out, object_out, prim_out,
+                                              point_out, normal_out, uv_out, i0, i1),
+                 0, origins.shape[0], grain=_CHUNK)
+
+
+@njit_serial
+def _closest_rays(sa, tri_prim, origins, directions, t_max, t_out, object_out, prim_out, point_out, normal_out,
+                  uv_out, i0, i1):
+    _closest_band(sa, tri_prim, origins, directions, t_max, t_out, object_out, prim_out, point_out, normal_out,
+                  uv_out, i0, i1, np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
+
+
+@njit
+def _closest_band(sa, tri_prim, origins, directions, t_max, t_out, object_out, prim_out, point_out, normal_out,
+                  uv_out, i0, i1, stack, stack_t):
+    geo, surf = geometry_of(sa), surfaces_of(sa)
+    for i in range(i0, i1):
+        o = (origins[i, 0], origins[i, 1], origins[i, 2])
+        d = (directions[i, 0], directions[i, 1], directions[i, 2])
+        t, ref, b1, b2, part = closest_hit(geo, o, d, 0.0, t_max[i], stack, stack_t, 0.0)
+        if t == NO_HIT:
+            t_out[i] = np.inf
+            object_out[i] = -1
+            prim_out[i] = -1
             for k in range(3):
-                point_out[i, k] = p[k]
-                normal_out[i, k] = n_geo[k]
-            uv_out[i, 0] = u
-            uv_out[i, 1] = v
+                point_out[i, k] = np.nan
+                normal_out[i, k] = np.nan
+            uv_out[i, 0] = np.nan
+            uv_out[i, 1] = np.nan
+            continue
+        if ref >= 0 and part >= 0:  # a triangle of a packed leaf: its record is in the row just tested
+            p, n_geo, u, v, obj, prim = _packed_record(geo, surf, o, d, t, ref, b1, b2, part)
+        elif ref >= 0:  # another triangle: only what the hit record holds (no shading normal)
+            p, n_geo, u, v, obj = _triangle_record(surf, o, d, t, ref, b1, b2)
+            prim = np.int64(tri_prim[ref])
+        else:
+            p, n_geo, n_sh, u, v, mat, obj, light = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
+            prim = _prim_of(sa, tri_prim, ref, part)
+        t_out[i] = t
+        object_out[i] = obj
+        prim_out[i] = prim
+        for k in range(3):
+            point_out[i, k] = p[k]
+            normal_out[i, k] = n_geo[k]
+        uv_out[i, 0] = u
+        uv_out[i, 1] = v
 
 
 @njit_inline
@@ -400,49 +412,58 @@ def _settle_meshes(ts, objs, codes, n, closed, state):
         state[objs[k]] = 0
 
 
-@njit_parallel
 def crossings(sa, tri_prim, closed, bounds, origins, directions, t_min, t_max, cap, max_hits, t_out, object_out,
               prim_out, enter_out, count_out, total_out):
     """Every crossing with t_min[i] < t < t_max[i] of each ray (module doc), sorted by t: the first max_hits of
     ray i in row i of t_out (n, max_hits) float64, object_out / prim_out int32, enter_out bool; count_out[i]
     (int64) of them are set, total_out[i] is how many there were in range, or -1 when the line crosses more
     than `cap` boundaries in the scene's box (call again with a larger cap). `closed` int8 (objects,): 1 for a
-    closed mesh (parity decides entering). `bounds` float64 (2, 3): the padded scene bounds."""
-    n = origins.shape[0]
-    for c in prange((n + _CHUNK - 1) // _CHUNK):
-        geo = geometry_of(sa)
-        stack = np.empty(config.BVH_STACK, np.int64)
-        ts = np.empty(cap)
-        objs = np.empty(cap, np.int32)
-        prims = np.empty(cap, np.int32)
-        codes = np.empty(cap, np.int8)
-        state = np.zeros(closed.shape[0], np.int8)
-        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
-            o = (origins[i, 0], origins[i, 1], origins[i, 2])
-            d = (directions[i, 0], directions[i, 1], directions[i, 2])
-            m = _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack)
-            count_out[i] = 0
-            if m < 0:
-                total_out[i] = -1
+    closed mesh (parity decides entering). `bounds` float64 (2, 3): the padded scene bounds.
+    Runs of rays go to threads (`threads.parallel_for`)."""
+    parallel_for(lambda i0, i1: _crossing_rays(sa, tri_prim, closed, bounds, origins, directions, t_min, t_max, cap,
+                                               max_hits, t_out, object_out, prim_out, enter_out, count_out,
+                                               total_out, i0, i1),
+                 0, origins.shape[0], grain=_CHUNK)
+
+
+@njit_serial
+def _crossing_rays(sa, tri_prim, closed, bounds, origins, directions, t_min, t_max, cap, max_hits, t_out, object_out,
+                   prim_out, enter_out, count_out, total_out, i0, i1):
+    _crossing_band(sa, tri_prim, closed, bounds, origins, directions, t_min, t_max, max_hits, t_out, object_out,
+                   prim_out, enter_out, count_out, total_out, i0, i1, np.empty(config.BVH_STACK, np.int64),
+                   np.empty(cap), np.empty(cap, np.int32), np.empty(cap, np.int32), np.empty(cap, np.int8),
+                   np.zeros(closed.shape[0], np.int8))
+
+
+@njit
+def _crossing_band(sa, tri_prim, closed, bounds, origins, directions, t_min, t_max, max_hits, t_out, object_out,
+                   prim_out, enter_out, count_out, total_out, i0, i1, stack, ts, objs, prims, codes, state):
+    geo = geometry_of(sa)
+    for i in range(i0, i1):
+        o = (origins[i, 0], origins[i, 1], origins[i, 2])
+        d = (directions[i, 0], directions[i, 1], directions[i, 2])
+        m = _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack)
+        count_out[i] = 0
+        if m < 0:
+            total_out[i] = -1
+            continue
+        _settle_meshes(ts, objs, codes, m, closed, state)
+        got = 0
+        total = 0
+        for k in range(m):
+            if (codes[k] & _DROP) != 0 or not (t_min[i] < ts[k] < t_max[i]):
                 continue
-            _settle_meshes(ts, objs, codes, m, closed, state)
-            got = 0
-            total = 0
-            for k in range(m):
-                if (codes[k] & _DROP) != 0 or not (t_min[i] < ts[k] < t_max[i]):
-                    continue
-                if got < max_hits:
-                    t_out[i, got] = ts[k]
-                    object_out[i, got] = objs[k]
-                    prim_out[i, got] = prims[k]
-                    enter_out[i, got] = (codes[k] & _ENTER) != 0
-                    got += 1
-                total += 1
-            count_out[i] = got
-            total_out[i] = total
+            if got < max_hits:
+                t_out[i, got] = ts[k]
+                object_out[i, got] = objs[k]
+                prim_out[i, got] = prims[k]
+                enter_out[i, got] = (codes[k] & _ENTER) != 0
+                got += 1
+            total += 1
+        count_out[i] = got
+        total_out[i] = total
 
 
-@njit_parallel
 def containing_kernel(sa, tri_prim, closed, bounds, points, probes, selected, column, cap, votes, overflow):
     """Point-in-solid votes: for each point and each probe direction (probes float64 (k, 3)), the line through
     the point along it is gathered and settled as `crossings` does, and every selected solid (selected bool
@@ -451,58 +472,66 @@ def containing_kernel(sa, tri_prim, closed, bounds, points, probes, selected, co
     the piece `RayCaster._segments` would report around t = 0. overflow[i] is set where a line crosses more
     than `cap` boundaries (votes of that point are then incomplete: the caller redoes it). With three probes,
     the third line is walked only where the first two disagree on some solid (a majority vote is then settled:
-    votes of 0 or 2 out of two stand for 0-1 or 2-3 out of three)."""
-    n = points.shape[0]
+    votes of 0 or 2 out of two stand for 0-1 or 2-3 out of three).
+    Runs of points go to threads (`threads.parallel_for`)."""
+    parallel_for(lambda i0, i1: _containing_points(sa, tri_prim, closed, bounds, points, probes, selected, column,
+                                                   cap, votes, overflow, i0, i1),
+                 0, points.shape[0], grain=_CHUNK)
+
+
+@njit_serial
+def _containing_points(sa, tri_prim, closed, bounds, points, probes, selected, column, cap, votes, overflow, i0, i1):
     n_obj = closed.shape[0]
-    for c in prange((n + _CHUNK - 1) // _CHUNK):
-        geo = geometry_of(sa)
-        stack = np.empty(config.BVH_STACK, np.int64)
-        ts = np.empty(cap)
-        objs = np.empty(cap, np.int32)
-        prims = np.empty(cap, np.int32)
-        codes = np.empty(cap, np.int8)
-        state = np.zeros(n_obj, np.int8)
-        before = np.full(n_obj, -1, np.int8)  # per solid: -1 no crossing before the point, else its entering
-        done = np.zeros(n_obj, np.bool_)
-        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
-            o = (points[i, 0], points[i, 1], points[i, 2])
-            for j in range(probes.shape[0]):
-                d = (probes[j, 0], probes[j, 1], probes[j, 2])
-                m = _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack)
-                if m < 0:
-                    overflow[i] = True
+    _containing_band(sa, tri_prim, closed, bounds, points, probes, selected, column, votes, overflow, i0, i1,
+                     np.empty(config.BVH_STACK, np.int64), np.empty(cap), np.empty(cap, np.int32),
+                     np.empty(cap, np.int32), np.empty(cap, np.int8), np.zeros(n_obj, np.int8),
+                     np.full(n_obj, -1, np.int8), np.zeros(n_obj, np.bool_))
+
+
+@njit
+def _containing_band(sa, tri_prim, closed, bounds, points, probes, selected, column, votes, overflow, i0, i1, stack,
+                     ts, objs, prims, codes, state, before, done):
+    """(`containing_kernel`; before: per solid, -1 for no crossing before the point, else whether it entered)"""
+    geo = geometry_of(sa)
+    for i in range(i0, i1):
+        o = (points[i, 0], points[i, 1], points[i, 2])
+        for j in range(probes.shape[0]):
+            d = (probes[j, 0], probes[j, 1], probes[j, 2])
+            m = _gather(sa, geo, tri_prim, bounds, o, d, ts, objs, prims, codes, stack)
+            if m < 0:
+                overflow[i] = True
+                break
+            _settle_meshes(ts, objs, codes, m, closed, state)
+            for k in range(m):
+                obj = objs[k]
+                if (codes[k] & _DROP) != 0 or not selected[obj] or done[obj]:
+                    continue
+                entering = (codes[k] & _ENTER) != 0
+                if ts[k] < 0.0:
+                    before[obj] = 1 if entering else 0
+                else:
+                    done[obj] = True
+                    if before[obj] == 1 and not entering and ts[k] > 0.0:
+                        votes[i, column[obj]] += 1
+            for k in range(m):  # reset what this line touched
+                before[objs[k]] = -1
+                done[objs[k]] = False
+            if j == 1 and probes.shape[0] == 3:  # two lines that agree on every solid decide the majority
+                split = False
+                for col in range(votes.shape[1]):
+                    split = split or votes[i, col] == 1
+                if not split:
                     break
-                _settle_meshes(ts, objs, codes, m, closed, state)
-                for k in range(m):
-                    obj = objs[k]
-                    if (codes[k] & _DROP) != 0 or not selected[obj] or done[obj]:
-                        continue
-                    entering = (codes[k] & _ENTER) != 0
-                    if ts[k] < 0.0:
-                        before[obj] = 1 if entering else 0
-                    else:
-                        done[obj] = True
-                        if before[obj] == 1 and not entering and ts[k] > 0.0:
-                            votes[i, column[obj]] += 1
-                for k in range(m):  # reset what this line touched
-                    before[objs[k]] = -1
-                    done[objs[k]] = False
-                if j == 1 and probes.shape[0] == 3:  # two lines that agree on every solid decide the majority
-                    split = False
-                    for col in range(votes.shape[1]):
-                        split = split or votes[i, col] == 1
-                    if not split:
-                        break
 
 
 # ------------------------------------------------------------------------------------------- camera rays
 
 
-@njit_parallel
+@njit_serial
 def camera_rays_kernel(cam_vecs, cam_params, width, height, fx, fy, origins_out, directions_out):
     """The rays through image points (fx[i], fy[i]) in pixel units (pixel (x, y)'s centre is (x + 0.5, y + 0.5)),
     through the centre of the lens: origins_out, directions_out float64 (n, 3), unit directions."""
-    for i in prange(fx.shape[0]):
+    for i in range(fx.shape[0]):
         o, d = camera_ray_at(cam_vecs, cam_params, width, height, fx[i], fy[i], 0.5, 0.5)
         for k in range(3):
             origins_out[i, k] = o[k]

@@ -21,7 +21,7 @@ from .hemicube import hemicube_form_factors
 from .camera import camera_ray
 from .illumination import sample_light
 from .optics import reflect, refract, schlick
-from .jit import njit, njit_alloc, njit_inline, njit_parallel, prange
+from .jit import njit, njit_alloc, njit_inline, njit_serial
 from .layout import LIGHT_DIRECTIONAL, LV_DIFFUSE
 from .rng import rand2_key, rand_key, sample_key
 from .sampling import stratified_2d, turn
@@ -46,15 +46,21 @@ def _lifted(pa, i):
     return offset_origin(c, n, n, _LIFT), n
 
 
-@njit_parallel
-def direct_light(sa, lights_sa, pa, samples, seed, out, rays_out):
+@njit_serial
+def direct_light(sa, lights_sa, pa, samples, seed, out, rays_out, c0, c1):
     """out (n, 3) += ρ·E/π of every point, spot and directional light (`lights_sa`: the scene's lighting arrays, the
     patches' BVH in `sa`): E = π·I·cos θ/att(d) at `samples` stratified points of each patch, shadow rays to the
-    light, averaged over the patch (DESIGN.md §3: a diffuse surface then shows ρ·I·cos θ/att, as in whitted)."""
+    light, averaged over the patch (DESIGN.md §3: a diffuse surface then shows ρ·I·cos θ/att, as in whitted).
+    Chunks c0 … c1−1 of _CHUNK patches (`threads.parallel_for`); rays_out[c]: chunk c's shadow rays."""
+    stack, stack_t, scratch = _scratch()
+    _direct_chunks(sa, lights_sa, pa, samples, seed, out, rays_out, c0, c1, stack, stack_t, scratch)
+
+
+@njit
+def _direct_chunks(sa, lights_sa, pa, samples, seed, out, rays_out, c0, c1, stack, stack_t, scratch):
     n = pa.area.shape[0]
-    for c in prange((n + _CHUNK - 1) // _CHUNK):
-        geo, lit = geometry_of(sa), lighting_of(lights_sa)
-        stack, stack_t, scratch = _scratch()
+    geo, lit = geometry_of(sa), lighting_of(lights_sa)
+    for c in range(c0, c1):
         rays = 0
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
             rho = pa.rho[i]
@@ -127,19 +133,27 @@ def _gather_ff(geo, src, j, x, n_i, samples, key, stack, scratch):
     return f * v, rays
 
 
-@njit_parallel
-def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, ff, rays_out):
+@njit_serial
+def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, ff, rays_out, c0,
+                  c1):
     """Progressive-refinement shots (Cohen et al. 1988) from the patches `shooters` (int64 (m,), rows of `src`)
     with unshot radiance `unshot_of` (m, 3): every receiving element i of `recv` (whose patch, `recv_patch[i]`,
     is not the shooter) gets ρ_i·F_ij·ΔL_j from each, F_ij by ray casting written to ff[i, q] (float64 (n_recv, m);
     the caller normalises and applies them). `shot` numbers the first shooter (random streams). A receiver whose share of a shot
     would stay below `threshold` (radiance, unoccluded) takes it only with probability share/threshold, weighted
-    by the inverse, and then with one shadow ray instead of `samples`."""
+    by the inverse, and then with one shadow ray instead of `samples`. Chunks c0 … c1−1 of _CHUNK receivers."""
+    stack, stack_t, scratch = _scratch()
+    _shoot_chunks(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, ff, rays_out, c0, c1,
+                  stack, stack_t, scratch)
+
+
+@njit
+def _shoot_chunks(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, ff, rays_out, c0, c1,
+                  stack, stack_t, scratch):
     n = recv.area.shape[0]
     m = shooters.shape[0]
-    for c in prange((n + _CHUNK - 1) // _CHUNK):
-        geo = geometry_of(sa)
-        stack, stack_t, scratch = _scratch()
+    geo = geometry_of(sa)
+    for c in range(c0, c1):
         rays = 0
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
             for q in range(m):
@@ -178,15 +192,19 @@ def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed,
         rays_out[c] += rays
 
 
-@njit_parallel
-def ff_rows_raycast(sa, recv, src, recv_patch, rows, samples, seed, out, rays_out):
+@njit_serial
+def ff_rows_raycast(sa, recv, src, recv_patch, rows, samples, seed, out, rays_out, r0, r1):
     """out[r, j] = F from receiving element rows[r] of `recv` to every shooting patch j of `src` (float32
-    (len(rows), n_src)), by ray casting: a band of the form-factor matrix of the Gauss–Seidel and Jacobi solvers."""
+    (len(rows), n_src)), by ray casting: a band of the form-factor matrix of the Gauss–Seidel and Jacobi solvers. Rows r0 … r1−1 of `out`."""
+    stack, stack_t, scratch = _scratch()
+    _ff_rows(sa, recv, src, recv_patch, rows, samples, seed, out, rays_out, r0, r1, stack, stack_t, scratch)
+
+
+@njit
+def _ff_rows(sa, recv, src, recv_patch, rows, samples, seed, out, rays_out, r0, r1, stack, stack_t, scratch):
     n = src.area.shape[0]
-    m = rows.shape[0]
-    for r in prange(m):
-        geo = geometry_of(sa)
-        stack, stack_t, scratch = _scratch()
+    geo = geometry_of(sa)
+    for r in range(r0, r1):
         i = rows[r]
         x, n_i = _lifted(recv, i)
         count = 0
@@ -215,20 +233,28 @@ def _cosine_dir(n, u1, u2):
     return (x * t[0] + y * b2[0] + z * n[0], x * t[1] + y * b2[1] + z * n[1], x * t[2] + y * b2[2] + z * n[2])
 
 
-@njit_parallel
+@njit_serial
 def shoot_stochastic(sa, recv, src, tri_poly, shooters, counts, first_ray, power, seed, iteration, n_chunks,
-                     received, rays_out):
+                     received, rays_out, c0, c1):
     """One iteration of stochastic Jacobi radiosity (Neumann et al. 1995; Bekaert's *Advanced Global
     Illumination* ch. 6): patch shooters[s] of `src` sends counts[s] rays from uniform points, cosine-distributed,
     each carrying power[s] (its unshot power ΔΦ = π·A·ΔL over its ray count, per channel); the first surface hit
     (the receiving elements `recv`, whose polygons the BVH `sa` holds) receives it, on the side the ray arrives
     on, times its reflectance. `received` (n_chunks, n_recv, 3) is summed over its first axis by the caller: each
     chunk of rays adds into its own row, so the sum does not depend on the thread count. `tri_poly` maps a BVH
-    triangle to its polygon; `first_ray` numbers each shooter's first ray (the chunks split that numbering)."""
+    triangle to its polygon; `first_ray` numbers each shooter's first ray (the chunks split that numbering).
+    Chunks c0 … c1−1 of the n_chunks."""
+    stack, stack_t, scratch = _scratch()
+    _stochastic_chunks(sa, recv, src, tri_poly, shooters, counts, first_ray, power, seed, iteration, n_chunks,
+                       received, rays_out, c0, c1, stack, stack_t, scratch)
+
+
+@njit
+def _stochastic_chunks(sa, recv, src, tri_poly, shooters, counts, first_ray, power, seed, iteration, n_chunks,
+                       received, rays_out, c0, c1, stack, stack_t, scratch):
     total = first_ray[-1] + counts[-1] if shooters.shape[0] else 0
-    for c in prange(n_chunks):
-        geo = geometry_of(sa)
-        stack, stack_t, scratch = _scratch()
+    geo = geometry_of(sa)
+    for c in range(c0, c1):
         lo = total * c // n_chunks
         hi = total * (c + 1) // n_chunks
         rays = 0
@@ -291,11 +317,12 @@ def gauss_seidel_sweep(F, rho, emission, recv_area, recv_patch, patch_area, radi
     return worst
 
 
-@njit_parallel
-def jacobi_sweep(F, rho, emission, patch_radiance, out):
-    """out = E + ρ·(F @ L̄): one Jacobi sweep (every element from the previous iterate's patch means)."""
-    n, m = F.shape
-    for i in prange(n):
+@njit_serial
+def jacobi_sweep(F, rho, emission, patch_radiance, out, r0, r1):
+    """out = E + ρ·(F @ L̄): one Jacobi sweep (every element from the previous iterate's patch means), rows
+    r0 … r1−1."""
+    m = F.shape[1]
+    for i in range(r0, r1):
         s0 = s1 = s2 = 0.0
         for j in range(m):
             f = F[i, j]
@@ -399,18 +426,28 @@ def _element_radiance_at(p, e, faces, element_face0, element_face1, vertices, ve
     return best0, best1, best2
 
 
-@njit_parallel
+@njit_serial
 def trace_two_pass(sa, tri_face, faces, face_element, element_face0, element_face1, vertices, vertex_radiance,
                    element_normal, element_optics, element_twin, cam_vecs, cam_params, width, height, spp, seed,
-                   max_depth, background, out, rays_out):
+                   max_depth, background, out, rays_out, y0, y1):
     """The two-pass display (Wallace, Cohen & Greenberg 1987): camera rays, traced Whitted-style through the
     mirrors (kr) and glass (kt) of the display mesh (`sa`: its triangles, `tri_face` their faces), read the
-    radiosity solution where they land (interpolated), weighted by the kr and kt on their way; out (H, W, 3)."""
-    for y in prange(height):
-        geo = geometry_of(sa)
-        stack, stack_t, scratch = _scratch()
-        size = 2 * max_depth + 4
-        st = np.empty((size, 10))  # origin, direction, weight, depth
+    radiosity solution where they land (interpolated), weighted by the kr and kt on their way; out (H, W, 3),
+    rows y0 … y1−1."""
+    stack, stack_t, scratch = _scratch()
+    _two_pass_rows(sa, tri_face, faces, face_element, element_face0, element_face1, vertices, vertex_radiance,
+                   element_normal, element_optics, element_twin, cam_vecs, cam_params, width, height, spp, seed,
+                   max_depth, background, out, rays_out, y0, y1, stack, stack_t,
+                   np.empty((2 * max_depth + 4, 10)))  # the ray stack: origin, direction, weight, depth
+
+
+@njit
+def _two_pass_rows(sa, tri_face, faces, face_element, element_face0, element_face1, vertices, vertex_radiance,
+                   element_normal, element_optics, element_twin, cam_vecs, cam_params, width, height, spp, seed,
+                   max_depth, background, out, rays_out, y0, y1, stack, stack_t, st):
+    geo = geometry_of(sa)
+    size = st.shape[0]
+    for y in range(y0, y1):
         rays = 0
         for x in range(width):
             r_sum = g_sum = b_sum = 0.0

@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-from .jit import njit, njit_alloc, njit_inline, njit_parallel, prange
+from .jit import njit, njit_alloc, njit_inline, njit_serial
 from .layout import CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV, MAT_CUTOUT
 from .texture import is_hole
 
@@ -44,9 +44,10 @@ MODE_COUNT = 1
 BIN_CHUNK = 4096
 
 
-@njit_parallel
+@njit_serial
 def project_vertices(positions, cam_vecs, cam_params, width, height, near, clip, screen):
-    """clip[i] = (X, Y, W, D); screen[i] = (x, y, key, 1/W) for vertices with D >= near (NaN-free otherwise)."""
+    """clip[i] = (X, Y, W, D); screen[i] = (x, y, key, 1/W) for vertices with D >= near (NaN-free otherwise).
+    Serial: a million vertices take a few milliseconds."""
     ortho = cam_params[CAM_ORTHO] != 0.0
     aspect = width / height
     if ortho:
@@ -55,7 +56,7 @@ def project_vertices(positions, cam_vecs, cam_params, width, height, near, clip,
     else:
         sx_scale = 1.0 / (aspect * cam_params[CAM_TAN_HALF_FOV])
         sy_scale = 1.0 / cam_params[CAM_TAN_HALF_FOV]
-    for i in prange(positions.shape[0]):
+    for i in range(positions.shape[0]):
         rx = positions[i, 0] - cam_vecs[0, 0]
         ry = positions[i, 1] - cam_vecs[0, 1]
         rz = positions[i, 2] - cam_vecs[0, 2]
@@ -152,11 +153,11 @@ def signed_area2(n, px, py):
     return s
 
 
-@njit_parallel
-def bin_prims(prim_start, prim_index, clip, screen, near, ortho, cull, width, height, jy, row_lo, row_hi):
-    """Rows [row_lo, row_hi) whose sample points (y = r + jy) a polygon may cover; empty for culled ones."""
-    n_prims = prim_start.shape[0] - 1
-    for c in prange((n_prims + BIN_CHUNK - 1) // BIN_CHUNK):
+@njit_serial
+def bin_prims(prim_start, prim_index, clip, screen, near, ortho, cull, width, height, jy, row_lo, row_hi, c0, c1):
+    """Rows [row_lo, row_hi) whose sample points (y = r + jy) a polygon may cover, empty for culled ones, for
+    the polygons of chunks c0 … c1−1 of BIN_CHUNK (`threads.parallel_for` over the chunks)."""
+    for c in range(c0, c1):
         bin_chunk(c, prim_start, prim_index, clip, screen, near, ortho, cull, width, height, jy, row_lo, row_hi)
 
 
@@ -227,18 +228,19 @@ def fill_bins(row_lo, row_hi, n_bands):
     return counts, prims
 
 
-@njit_parallel
+@njit_serial
 def raster_bands(bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
                  width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count, tex, materials, prim_material,
-                 uv_at):
-    """The raster pass: each band of BAND rows scan-converts its polygons into the buffers. In MODE_DEPTH
+                 uv_at, b0, b1):
+    """The raster pass over bands b0 … b1−1 (`threads.parallel_for` over the bands): each band of BAND rows
+    scan-converts its polygons into the buffers. In MODE_DEPTH
     it clears zbuf (−inf) and ids (−1) first; gbuf is written only where ids >= 0.
 
     Opacity cut-outs: a polygon whose material (materials[prim_material[prim]], float64 (nm, MAT_SIZE); int32
     (n_prims,)) has MAT_CUTOUT set writes no sample where its α (`texture.is_hole`, `tex` a view with tex_info and
     tex_pixels) at the interpolated (u, v) of attrs columns uv_at, uv_at + 1 is a hole, so what lies behind it
     stays in the buffers. uv_at −1: no cut-outs (the materials are not read)."""
-    for band in prange(bins.shape[0] - 1):
+    for band in range(b0, b1):
         raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
                     width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count, tex, materials,
                     prim_material, uv_at)

@@ -48,13 +48,14 @@ from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit, occluded
 from ..kernels.emitters import emitter_pdf, sample_emitter
 from ..kernels.illumination import is_solid
-from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
+from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
 from ..kernels.layout import CAM_APERTURE, LIGHT_SPHERE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS
 from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
 from ..kernels.sobol import pair_seed, sobol_block
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
+from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .common import Film, check_memory, row_bands, set_threads
 
@@ -350,26 +351,30 @@ def _pixel_point(filter_kind, u1, u2, x, y):
             y + 0.5 + truncated_gaussian(u2, GAUSSIAN_SIGMA, GAUSSIAN_RADIUS))
 
 
-@njit_parallel
+@njit_serial
 def _pass_rows(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, spp, seed, max_depth, mode,
                sampler, filter_kind, keep, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row):
+    """Rows y0 … y1−1 of a pass (`_pass_band`), with their scratch buffers."""
+    scratch = _scratch()
+    seeds = np.empty(SOBOL_PAIRS, np.uint64)  # the pixel's Sobol pair seeds (`sobol.pair_seed`)
+    points = np.empty((2 * SOBOL_PAIRS, SOBOL_CHUNK))  # a chunk of the pixel's samples' Sobol points
+    walk = np.empty(SOBOL_CHUNK, np.uint64)  # sobol_block's scratch
+    _pass_band(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, spp, seed, max_depth, mode,
+               sampler, filter_kind, keep, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row, scratch,
+               seeds, points, walk)
+
+
+@njit
+def _pass_band(sa, em, cam_vecs, cam_params, cam_time, width, height, y0, y1, s0, s1, spp, seed, max_depth, mode,
+               sampler, filter_kind, keep, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row, scratch,
+               seeds, points, walk):
     """Samples s0 … s1−1 of every pixel of rows y0 … y1−1, added (in sample order) to the float64 buffers:
     sums (H, W, 3) of radiance; where `keep` says so (`KEEP_*` bits: only what the asked-for AOVs and the
     denoiser read is stored, a third of the stores per sample otherwise), sums2 (H, W, 3) of its square and
     guides (H, W, 12) of albedo, normal, the first hit's own emission and the direct light; depth and object_id
     from sample 0."""
-    half = (y1 - y0 + 1) // 2
-    for i in prange(y0, y1):
-        # even rows of the band first, then odd ones: prange hands each thread a contiguous run of i, and
-        # neighbouring rows cost alike, so each thread gets a comb of the band rather than one end of it (on the
-        # Cornell box, by rays counted per row, the busier half of a band had 4.3% more than half the work;
-        # combed, 0.5%)
-        y = y0 + (2 * (i - y0) if i - y0 < half else 2 * (i - y0 - half) + 1)
-        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        scratch = _scratch()
-        seeds = np.empty(SOBOL_PAIRS, np.uint64)  # the pixel's Sobol pair seeds (`sobol.pair_seed`)
-        points = np.empty((2 * SOBOL_PAIRS, SOBOL_CHUNK))  # a chunk of the pixel's samples' Sobol points
-        walk = np.empty(SOBOL_CHUNK, np.uint64)  # sobol_block's scratch
+    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    for y in range(y0, y1):
         rays = 0
         bad = 0
         for x in range(width):
@@ -490,9 +495,12 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
             n = 1 if per_sample_s is None else max(1, min(spp - done, int(PASS_SECONDS / max(per_sample_s, 1e-9))))
             t0 = _time.perf_counter()
             for y0, y1 in bands:
-                _pass_rows(sa, em, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
-                           np.int64(y1), np.int64(done), np.int64(done + n), np.int64(spp), seed, max_depth, mode,
-                           sampler, filter_kind, keep, sums, sums2, guides, depth, object_id, rays_per_row, bad_per_row)
+                s0, s1 = np.int64(done), np.int64(done + n)
+                parallel_for(lambda r0, r1: _pass_rows(sa, em, cam_vecs, cam_params, cam_time, np.int64(width),
+                                                       np.int64(height), np.int64(r0), np.int64(r1), s0, s1,
+                                                       np.int64(spp), seed, max_depth, mode, sampler, filter_kind,
+                                                       keep, sums, sums2, guides, depth, object_id, rays_per_row,
+                                                       bad_per_row), y0, y1)
                 if progress is not None:
                     fraction = (done + n * y1 / height) / spp
                     if settings.time_limit is not None:

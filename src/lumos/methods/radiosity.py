@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import LumosError
+from ..kernels.threads import parallel_for
 from .common import Film
 from .raster import draw_colours
 
@@ -97,11 +98,14 @@ def _two_pass(solution, camera, settings, background, progress) -> Film:
     depth = settings.resolved_max_depth()
     out = np.zeros((height, width, 3))
     rays = np.zeros(height, np.int64)
-    trace_two_pass(bvh.arrays, tri_face, np.ascontiguousarray(faces), solution.face_element, face0, face1,
-                   solution.vertices, solution.vertex_radiance, solution.element_normal, solution.element_optics,
-                   solution.element_twin, cam_vecs, cam_params, np.int64(width), np.int64(height), np.int64(spp),
-                   np.int64(settings.seed), np.int64(UNBOUNDED_DEPTH if depth is None else depth),
-                   np.asarray(background, np.float64), out, rays)
+    faces, background = np.ascontiguousarray(faces), np.asarray(background, np.float64)
+    max_depth = np.int64(UNBOUNDED_DEPTH if depth is None else depth)
+    parallel_for(lambda y0, y1: trace_two_pass(bvh.arrays, tri_face, faces, solution.face_element, face0, face1,
+                                               solution.vertices, solution.vertex_radiance, solution.element_normal,
+                                               solution.element_optics, solution.element_twin, cam_vecs, cam_params,
+                                               np.int64(width), np.int64(height), np.int64(spp),
+                                               np.int64(settings.seed), max_depth, background, out, rays,
+                                               np.int64(y0), np.int64(y1)), 0, height)
     if progress is not None:
         progress(1.0)
     return Film(out.astype(np.float32), {}, int(rays.sum()), threads, primary_rays=width * height * spp)

@@ -28,13 +28,14 @@ from ..errors import LumosError
 from ..compile.camera import camera_arrays
 from ..kernels import raster as R
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
-from ..kernels.jit import njit, njit_inline, njit_parallel, prange
+from ..kernels.jit import njit, njit_inline, njit_serial
 from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, LIGHT_SPHERE, MAT_BUMP, MAT_CUTOUT, MAT_EMISSION,
                               MAT_KA, MAT_KD, MAT_KS, MAT_SHININESS, MAT_SIZE, MAT_TEXTURE, Textures)
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
 from ..kernels.surface import shading_side
 from ..kernels.texture import TEX_SIZE, bump_normal, material_coeffs_filtered
+from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, set_threads, term_aovs
 
@@ -140,9 +141,9 @@ _NO_TEXTURES = Textures(np.zeros((0, TEX_SIZE)), np.zeros((0, 3), np.float32), n
 _NO_PIXEL = np.array([-1, -1], np.int64)
 
 
-@njit_parallel
+@njit_serial
 def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out,
-                  rays):
+                  rays, c0, c1):
     """The vertex (or polygon) stage of the illumination model.
 
     Flat (`gouraud` False): at each polygon's centroid, with its face normal turned to the viewer and its
@@ -150,14 +151,19 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
     specular, Kd), 12 values. Gouraud: at each vertex, the light that reaches it with unit coefficients (Kd = Ks = 1;
     the texture, or the material's own Kd and Ks, multiplies it per pixel), out[i] = (diffuse, specular) light on
     the side the normal points to, then on the other side, 12 values: which side the viewer sees is known per
-    pixel, from the polygon's face normal."""
+    pixel, from the polygon's face normal. Chunks c0 … c1−1 of _CHUNK points; rays[c]: the shadow rays of chunk c."""
+    _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out, rays,
+                  c0, c1, np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
+
+
+@njit
+def _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out,
+                  rays, c0, c1, stack, stack_t):
     n_points = points.shape[0]
     one = (1.0, 1.0, 1.0)
     zero = (0.0, 0.0, 0.0)
-    for c in prange((n_points + _CHUNK - 1) // _CHUNK):
-        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        stack = np.empty(config.BVH_STACK, np.int64)
-        stack_t = np.empty(config.BVH_STACK)
+    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    for c in range(c0, c1):
         count = 0
         for i in range(c * _CHUNK, min(n_points, (c + 1) * _CHUNK)):
             p = (points[i, 0], points[i, 1], points[i, 2])
@@ -192,20 +198,28 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
         rays[c] = count
 
 
-@njit_parallel
+@njit_serial
 def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
            pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
-           object_id, terms, want_terms, rays_per_row, explain, light_log):
+           object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1):
     """One shading pass over the G-buffer: adds weight × each pixel's radiance to `accum` (float32) and, with
     `want_terms`, weight × its ambient, diffuse, specular and emitted terms to terms[..., 0:12]; with `aovs` set
     (the first pass, when any is asked for) it also fills the AOV buffers. At pixel `explain` (x, y; (−1, −1)
     for none) Phong shading records each light's share in `light_log` (`lumos.explain`). `uv_at` is the G-buffer channel of
-    (u, v) (−1: the scene has no textures), `light_at` that of Gouraud's interpolated light."""
-    height, width = ids.shape
-    for y in prange(height):
-        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        stack = np.empty(config.BVH_STACK, np.int64)
-        stack_t = np.empty(config.BVH_STACK)
+    (u, v) (−1: the scene has no textures), `light_at` that of Gouraud's interpolated light. Rows y0 … y1−1."""
+    _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
+                pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
+                object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1,
+                np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
+
+
+@njit
+def _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
+                pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
+                object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1, stack, stack_t):
+    width = ids.shape[1]
+    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    for y in range(y0, y1):
         rays = 0
         amb = lit.ambient
         for x in range(width):
@@ -332,8 +346,10 @@ class Rasterizer:
         n = self.mesh.n_prims
         row_lo = np.zeros(n, np.int32)
         row_hi = np.zeros(n, np.int32)
-        R.bin_prims(self.mesh.prim_start, self.mesh.prim_index, self.clip, self.screen, self.near,
-                    self.ortho, self.cull, np.int64(self.width), np.int64(self.height), float(jy), row_lo, row_hi)
+        parallel_for(lambda c0, c1: R.bin_prims(self.mesh.prim_start, self.mesh.prim_index, self.clip, self.screen,
+                                                self.near, self.ortho, self.cull, np.int64(self.width),
+                                                np.int64(self.height), float(jy), row_lo, row_hi, np.int64(c0),
+                                                np.int64(c1)), 0, -(-n // R.BIN_CHUNK))
         bins, prims = R.fill_bins(row_lo, row_hi, np.int64(self.n_bands))
         return row_lo, row_hi, bins, prims
 
@@ -355,9 +371,12 @@ class Rasterizer:
 
     def _run(self, jx, jy, mode, zbuf, ids, gbuf, count):
         row_lo, row_hi, bins, prims = self._bin(jy)
-        R.raster_bands(bins, prims, self.mesh.prim_start, self.mesh.prim_index, self.clip, self.screen,
-                       self.attrs, self.near, self.ortho, self.persp, np.int64(self.width), np.int64(self.height),
-                       float(jx), float(jy), row_lo, row_hi, np.int64(mode), zbuf, ids, gbuf, count, *self.cutouts)
+        parallel_for(lambda b0, b1: R.raster_bands(bins, prims, self.mesh.prim_start, self.mesh.prim_index,
+                                                   self.clip, self.screen, self.attrs, self.near, self.ortho,
+                                                   self.persp, np.int64(self.width), np.int64(self.height), float(jx),
+                                                   float(jy), row_lo, row_hi, np.int64(mode), zbuf, ids, gbuf, count,
+                                                   *self.cutouts, np.int64(b0), np.int64(b1)),
+                     0, len(bins) - 1)
 
 
 class RasterFrame:
@@ -396,17 +415,20 @@ class RasterFrame:
             vert_material[mesh.prim_index] = np.repeat(mesh.prim_info[:, 0], np.diff(mesh.prim_start))
             light = np.zeros((nv, 12))
             counts = np.zeros(-(-nv // _CHUNK), np.int64)
-            _light_points(sa, mesh.positions, mesh.normals, mesh.uvs,
-                          _vertex_frames(mesh, self.frames) if textured else self.frames,
-                          vert_material, self.cam_vecs, self.ortho, self.seed, self.shadows, True, light, counts)
+            frames = _vertex_frames(mesh, self.frames) if textured else self.frames
+            parallel_for(lambda c0, c1: _light_points(sa, mesh.positions, mesh.normals, mesh.uvs, frames,
+                                                      vert_material, self.cam_vecs, self.ortho, self.seed,
+                                                      self.shadows, True, light, counts, c0, c1), 0, len(counts))
             attrs[:, self.light_at:self.light_at + 12] = light
             self.rays += int(counts.sum())
         if self.shading == FLAT and mesh.n_prims:
             self.prim_terms = np.zeros((mesh.n_prims, 12))
             counts = np.zeros(-(-mesh.n_prims // _CHUNK), np.int64)
-            _light_points(sa, mesh.prim_point, mesh.prim_normal, mesh.prim_uv, self.frames,
-                          np.ascontiguousarray(mesh.prim_info[:, 0]), self.cam_vecs, self.ortho, self.seed,
-                          self.shadows, False, self.prim_terms, counts)
+            materials_of = np.ascontiguousarray(mesh.prim_info[:, 0])
+            parallel_for(lambda c0, c1: _light_points(sa, mesh.prim_point, mesh.prim_normal, mesh.prim_uv,
+                                                      self.frames, materials_of, self.cam_vecs, self.ortho, self.seed,
+                                                      self.shadows, False, self.prim_terms, counts, c0, c1),
+                         0, len(counts))
             self.rays += int(counts.sum())
         self.attrs = attrs
         cutouts = textured and bool((sa.materials[:, MAT_CUTOUT] != 0.0).any())
@@ -422,11 +444,14 @@ class RasterFrame:
         zbuf, ids, gbuf = self.raster.draw(jx, jy)
         want_aovs = aov_buffers is not None
         depth, normal, albedo, object_id = aov_buffers if want_aovs else allocate_aovs(1, 1)
-        _shade(self.sa, ids, gbuf, np.int64(self.uv_at), np.int64(self.light_at), self.mesh.prim_info,
-               self.mesh.prim_normal, self.prim_terms, self.frames, self.cam_vecs, self.ortho, self.pixel_size,
-               np.int64(self.shading), bool(self.settings.mipmap), self.seed, np.int64(s), self.shadows, weight,
-               radiance, want_aovs, depth, normal, albedo, object_id, terms, want_terms, rays_per_row, explain,
-               light_log if light_log is not None else np.zeros((0, PER_LIGHT_SIZE)))
+        log = light_log if light_log is not None else np.zeros((0, PER_LIGHT_SIZE))
+        parallel_for(lambda y0, y1: _shade(self.sa, ids, gbuf, np.int64(self.uv_at), np.int64(self.light_at),
+                                           self.mesh.prim_info, self.mesh.prim_normal, self.prim_terms, self.frames,
+                                           self.cam_vecs, self.ortho, self.pixel_size, np.int64(self.shading),
+                                           bool(self.settings.mipmap), self.seed, np.int64(s), self.shadows, weight,
+                                           radiance, want_aovs, depth, normal, albedo, object_id, terms, want_terms,
+                                           rays_per_row, explain, log, np.int64(y0), np.int64(y1)),
+                     0, ids.shape[0])
         return zbuf, ids, gbuf
 
 
@@ -472,13 +497,13 @@ def _vertex_frames(mesh, frames):
 # -------------------------------------------------------------------- drawing precomputed colours (radiosity)
 
 
-@njit_parallel
+@njit_serial
 def _shade_colours(ids, gbuf, prim_colour, shading, background, weight, accum, aovs, cam_vecs, ortho, depth,
-                   normal, albedo, object_id, prim_albedo, prim_object):
+                   normal, albedo, object_id, prim_albedo, prim_object, y0, y1):
     """One pass over the G-buffer (position, normal, colour): adds weight × the interpolated colour (Gouraud) or
-    the polygon's colour (flat) to `accum`; with `aovs`, fills the AOV buffers."""
-    height, width = ids.shape
-    for y in prange(height):
+    the polygon's colour (flat) to `accum`; with `aovs`, fills the AOV buffers. Rows y0 … y1−1."""
+    width = ids.shape[1]
+    for y in range(y0, y1):
         for x in range(width):
             prim = ids[y, x]
             if prim < 0:
@@ -528,12 +553,15 @@ def draw_colours(positions, normals, faces, vertex_colour, face_colour, face_alb
     depth, normal, albedo, object_id = allocate_aovs(height, width) if want_aovs else allocate_aovs(1, 1)
     offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
     shading = FLAT if settings.radiosity.display == "flat" else GOURAUD
+    colours, bg = np.ascontiguousarray(face_colour, np.float64), np.asarray(background, np.float64)
+    albedos, objects = np.ascontiguousarray(face_albedo, np.float64), np.ascontiguousarray(face_object, np.int32)
+    ortho = camera.type == "orthographic"
     for s, (jx, jy) in enumerate(offsets):
         zbuf, ids, gbuf = raster.draw(jx, jy)
-        _shade_colours(ids, gbuf, np.ascontiguousarray(face_colour, np.float64), np.int64(shading),
-                       np.asarray(background, np.float64), 1.0 / len(offsets), radiance, want_aovs and s == 0,
-                       cam_vecs, camera.type == "orthographic", depth, normal, albedo, object_id,
-                       np.ascontiguousarray(face_albedo, np.float64), np.ascontiguousarray(face_object, np.int32))
+        parallel_for(lambda y0, y1: _shade_colours(ids, gbuf, colours, np.int64(shading), bg, 1.0 / len(offsets),
+                                                   radiance, want_aovs and s == 0, cam_vecs, ortho, depth, normal,
+                                                   albedo, object_id, albedos, objects, np.int64(y0), np.int64(y1)),
+                     0, height)
         if progress is not None:
             progress((s + 1) / len(offsets))
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,

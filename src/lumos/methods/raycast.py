@@ -16,10 +16,11 @@ from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
-from ..kernels.jit import njit, njit_parallel, prange
+from ..kernels.jit import njit, njit_serial
 from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
+from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
 from ..errors import LumosError
@@ -53,20 +54,27 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
     return rgb, n_sh, kd, object_id, rays, (a, dif, spec, e)
 
 
-@njit_parallel
+@njit_serial
 def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, radiance, depth, normal, albedo,
                   object_id, terms, want_terms, rays_per_row, explain, light_log):
+    """Rows y0 … y1−1 (`_raycast_band`), with their traversal stacks."""
+    stack = np.empty(config.BVH_STACK, np.int64)
+    stack_t = np.empty(config.BVH_STACK)
+    _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, radiance, depth, normal, albedo,
+                  object_id, terms, want_terms, rays_per_row, explain, light_log, stack, stack_t)
+
+
+@njit
+def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, radiance, depth, normal, albedo,
+                  object_id, terms, want_terms, rays_per_row, explain, light_log, stack, stack_t):
     """One band of rows: `spp` camera rays per pixel, box-filtered; the first sample's depth, normal, albedo and
     object id in those (H, W) buffers, or nowhere when they are None (Numba compiles that case apart, without
     the stores: even an untaken branch to them costs a tenth of a render of a large mesh); with `want_terms`, the
     mean of the samples' terms (ambient, diffuse, specular, emitted; reflected and transmitted stay 0) in
     terms[y, x, :18]. At pixel `explain` (x, y), the first sample's per-light shares go to `light_log`
     (`lumos.explain`)."""
-    for y in prange(y0, y1):
-        # per row: parfor bodies cannot capture a namedtuple built outside them
-        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        stack = np.empty(config.BVH_STACK, np.int64)
-        stack_t = np.empty(config.BVH_STACK)
+    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    for y in range(y0, y1):
         rays = 0
         inv = 1.0 / spp
         for x in range(width):
@@ -137,8 +145,9 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
     if explain is not None:
         pixel, light_log, bands = np.array(explain[:2], np.int64), explain[2], [(explain[1], explain[1] + 1)]
     for y0, y1 in bands:
-        _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, y0, y1, spp, settings.seed, radiance,
-                      depth, normal, albedo, object_id, terms, want_terms, rays_per_row, pixel, light_log)
+        parallel_for(lambda r0, r1: _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, r0, r1, spp,
+                                                  settings.seed, radiance, depth, normal, albedo, object_id, terms,
+                                                  want_terms, rays_per_row, pixel, light_log), y0, y1)
         if progress is not None:
             progress(y1 / height)
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,

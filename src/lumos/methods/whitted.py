@@ -32,7 +32,7 @@ from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray, camera_ray_at
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
-from ..kernels.jit import njit, njit_alloc, njit_inline, njit_parallel, prange
+from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
 from ..kernels.layout import (
     LIGHT_SPHERE,
     MAT_FRESNEL,
@@ -45,6 +45,7 @@ from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
+from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, owned_views, surfaces_of, textures_of
 from ..errors import LumosError
 from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
@@ -335,15 +336,21 @@ def _store_aovs(x, y, info, depth, normal, albedo, object_id):
         object_id[y, x] = obj
 
 
-@njit_parallel
+@njit_serial
 def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth,
                  radiance, depth, normal, albedo, object_id, samples, terms, want_terms, rays_per_row):
     """antialias none / supersample: `spp` camera rays per pixel (the pixel centre when spp is 1); with
-    `want_terms`, the mean of the samples' terms in terms[y, x, :18]."""
-    for y in prange(y0, y1):
-        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        scratch = _scratch(max_depth, 0, 0, want_terms)
-        tsum = np.zeros(18)
+    `want_terms`, the mean of the samples' terms in terms[y, x, :18]. Rows y0 … y1−1."""
+    _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth, radiance, depth,
+                 normal, albedo, object_id, samples, terms, want_terms, rays_per_row,
+                 _scratch(max_depth, 0, 0, want_terms), np.zeros(18))
+
+
+@njit
+def _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth, radiance, depth,
+                 normal, albedo, object_id, samples, terms, want_terms, rays_per_row, scratch, tsum):
+    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    for y in range(y0, y1):
         rays = 0
         for x in range(width):
             rgb, n = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
@@ -406,14 +413,20 @@ def _point(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, f
     return rgb, n
 
 
-@njit_parallel
+@njit_serial
 def _corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, corners, rays_per_row):
-    # rays_per_row here has height + 1 entries, one per row of corners
     """adaptive, stage 1: one ray through every pixel corner (W+1 × H+1 of them, shared by neighbours): its
-    radiance in corners[y, x, 0:3] and, when corners has 21 channels, its terms after it."""
-    for y in prange(y0, y1):
-        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        scratch = _scratch(max_depth, 0, 0, corners.shape[2] > 3)
+    radiance in corners[y, x, 0:3] and, when corners has 21 channels, its terms after it. Corner rows y0 … y1−1
+    (rays_per_row here has height + 1 entries, one per row of corners)."""
+    _corner_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, corners, rays_per_row,
+                 _scratch(max_depth, 0, 0, corners.shape[2] > 3))
+
+
+@njit
+def _corner_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, corners, rays_per_row,
+                 scratch):
+    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    for y in range(y0, y1):
         rays = 0
         for x in range(width + 1):
             key = y * (width + 1) + x
@@ -426,22 +439,26 @@ def _corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed
         rays_per_row[y] += rays
 
 
-@njit_parallel
+@njit_serial
 def _adaptive_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, threshold,
                    max_level, corners, radiance, samples, terms, rays_per_row):
     """adaptive, stage 2: each pixel from its corners, its squares cut in four where the corners differ
-    (`adaptive_pixel`); with 21-channel corners, also its terms."""
-    cells = np.int64(1) << max_level
-    n = cells + 1
+    (`adaptive_pixel`); with 21-channel corners, also its terms. Rows y0 … y1−1."""
+    n = (np.int64(1) << max_level) + 1
     channels = corners.shape[2]
-    for y in prange(y0, y1):
-        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        scratch = _scratch(max_depth, 0, 0, channels > 3)
-        grid = np.empty((n, n, channels))
-        stamp = np.full((n, n), -1, np.int64)
-        weights = np.zeros((1, 1))
-        stack = np.empty((4 * max_level + 4, 4), np.int64)  # squares: ix, iy, size (in cells), level
-        value = np.empty(channels)
+    _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, threshold, max_level,
+                   corners, radiance, samples, terms, rays_per_row, _scratch(max_depth, 0, 0, channels > 3),
+                   np.empty((n, n, channels)), np.full((n, n), -1, np.int64), np.zeros((1, 1)),
+                   np.empty((4 * max_level + 4, 4), np.int64), np.empty(channels))
+
+
+@njit
+def _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, threshold, max_level,
+                   corners, radiance, samples, terms, rays_per_row, scratch, grid, stamp, weights, stack, value):
+    """(`_adaptive_rows`; stack: the squares to visit, as ix, iy, size in cells, level)"""
+    channels = corners.shape[2]
+    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    for y in range(y0, y1):
         rays = 0
         for x in range(width):
             count, nr = adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed,
@@ -539,13 +556,19 @@ def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, h
     return count, rays
 
 
-@njit_parallel
+@njit_serial
 def _aov_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth,
               depth, normal, albedo, object_id, rays_per_row):
-    """adaptive with AOVs: one more ray through each pixel centre, for the AOVs only."""
-    for y in prange(y0, y1):
-        geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-        scratch = _scratch(np.int64(0))
+    """adaptive with AOVs: one more ray through each pixel centre, for the AOVs only. Rows y0 … y1−1."""
+    _aov_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, depth, normal, albedo, object_id,
+              rays_per_row, _scratch(np.int64(0)))
+
+
+@njit
+def _aov_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, depth, normal, albedo, object_id,
+              rays_per_row, scratch):
+    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    for y in range(y0, y1):
         rays = 0
         for x in range(width):
             o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, 0, 1, seed, y * width + x)
@@ -635,27 +658,32 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
         total = len(bands) * 2
         done = 0
         for y0, y1 in row_bands(height + 1):
-            _corner_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
-                         np.int64(y1), seed, max_depth, corners, corner_rays)
+            parallel_for(lambda r0, r1: _corner_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width),
+                                                     np.int64(height), np.int64(r0), np.int64(r1), seed, max_depth,
+                                                     corners, corner_rays), y0, y1)
             done += 1
             if progress is not None:
                 progress(min(done / total, 0.5))
         for y0, y1 in bands:
-            _adaptive_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
-                           np.int64(y1), seed, max_depth, float(settings.adaptive_threshold),
-                           np.int64(settings.adaptive_depth), corners, radiance, samples, terms, rays_per_row)
+            parallel_for(lambda r0, r1: _adaptive_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width),
+                                                       np.int64(height), np.int64(r0), np.int64(r1), seed, max_depth,
+                                                       float(settings.adaptive_threshold),
+                                                       np.int64(settings.adaptive_depth), corners, radiance, samples,
+                                                       terms, rays_per_row), y0, y1)
             if progress is not None:
                 progress(0.5 + 0.5 * y1 / height)
         if set(settings.aov) & {"depth", "normal", "albedo", "object_id"}:
             for y0, y1 in bands:
-                _aov_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
-                          np.int64(y1), seed, max_depth, depth, normal, albedo, object_id, rays_per_row)
+                parallel_for(lambda r0, r1: _aov_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width),
+                                                      np.int64(height), np.int64(r0), np.int64(r1), seed, max_depth,
+                                                      depth, normal, albedo, object_id, rays_per_row), y0, y1)
     else:
         spp = np.int64(1 if mode == AA_NONE else settings.spp)
         for y0, y1 in bands:
-            _sample_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width), np.int64(height), np.int64(y0),
-                         np.int64(y1), spp, seed, max_depth, radiance, depth, normal, albedo, object_id, samples,
-                         terms, want_terms, rays_per_row)
+            parallel_for(lambda r0, r1: _sample_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width),
+                                                     np.int64(height), np.int64(r0), np.int64(r1), spp, seed,
+                                                     max_depth, radiance, depth, normal, albedo, object_id, samples,
+                                                     terms, want_terms, rays_per_row), y0, y1)
             if progress is not None:
                 progress(y1 / height)
     all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id, "samples": samples}

@@ -20,6 +20,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from ..errors import LumosError
+from ..kernels.threads import parallel_for
 from ..kernels import layout as L
 from .patches import Patches, refine
 from .solution import Solution
@@ -143,7 +144,9 @@ def _first_light(compiled, recv, bvh, rs, seed):
     first = np.zeros((n, 3))
     rays = np.zeros(-(-n // 256), np.int64)
     if np.any(compiled.arrays.light_kind <= L.LIGHT_DIRECTIONAL):
-        direct_light(bvh.arrays, compiled.arrays, recv, np.int64(rs.visibility_samples), np.int64(seed), first, rays)
+        parallel_for(lambda c0, c1: direct_light(bvh.arrays, compiled.arrays, recv, np.int64(rs.visibility_samples),
+                                                 np.int64(seed), first, rays, np.int64(c0), np.int64(c1)),
+                     0, len(rays))
     sent = recv.emission + first
     if not np.any(sent > 0):
         raise LumosError("radiosity: nothing in the scene emits light (no area light, emissive object, point, spot "

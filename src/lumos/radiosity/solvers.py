@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import LumosError
+from ..kernels.threads import parallel_for
 
 #: solver: auto takes progressive refinement up to this many patches, stochastic radiosity beyond.
 AUTO_PROGRESSIVE_MAX = 20_000
@@ -132,8 +133,10 @@ def form_factor_matrix(rs, level: Level, seed) -> tuple[np.ndarray, int]:
     for start in range(0, n, band):
         rows = np.arange(start, min(n, start + band), dtype=np.int64)
         counts = np.zeros(len(rows), np.int64)
-        ff_rows_raycast(level.bvh.arrays, level.recv, level.src, level.recv_patch, rows,
-                        np.int64(rs.visibility_samples), np.int64(seed), F[start:start + len(rows)], counts)
+        out = F[start:start + len(rows)]
+        parallel_for(lambda r0, r1: ff_rows_raycast(level.bvh.arrays, level.recv, level.src, level.recv_patch, rows,
+                                                    np.int64(rs.visibility_samples), np.int64(seed), out, counts,
+                                                    np.int64(r0), np.int64(r1)), 0, len(rows))
         rays += int(counts.sum())
     return F, rays
 
@@ -158,7 +161,8 @@ def gathering(rs, level: Level, sent, seed, progress, say) -> Result:
             change = gauss_seidel_sweep(F, recv.rho, sent, recv.area, level.recv_patch, level.src.area, radiance,
                                         means)
         else:
-            jacobi_sweep(F, recv.rho, sent, means, nxt)
+            parallel_for(lambda r0, r1: jacobi_sweep(F, recv.rho, sent, means, nxt, np.int64(r0), np.int64(r1)), 0,
+                         len(nxt))
             change = float(np.abs(nxt - radiance).mean(axis=1).max())
             radiance, nxt = nxt, radiance
             means = level.patch_means(radiance)
@@ -219,8 +223,10 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
                 hemi.shoot(int(j), d[q], shots + q, radiance, unshot_e)
         else:
             ff = np.empty((len(recv.area), len(top)))
-            shoot_raycast(level.bvh.arrays, recv, src, level.recv_patch, top, d, np.int64(rs.visibility_samples),
-                          np.int64(seed), np.int64(shots), threshold, ff, rays)
+            parallel_for(lambda c0, c1: shoot_raycast(level.bvh.arrays, recv, src, level.recv_patch, top, d,
+                                                      np.int64(rs.visibility_samples), np.int64(seed),
+                                                      np.int64(shots), threshold, ff, rays, np.int64(c0),
+                                                      np.int64(c1)), 0, len(rays))
             got = _conserving(ff, recv.area, area[top]) @ d
             got *= recv.rho
             radiance += got
@@ -301,8 +307,10 @@ def stochastic(rs, level: Level, sent, seed, progress, say) -> Result:
         first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
         ray_power = np.pi * area[shooters, None] * unshot[shooters] / counts[:, None]
         received[:] = 0.0
-        shoot_stochastic(level.bvh.arrays, recv, src, level.tri_poly, shooters, counts, first, ray_power,
-                         np.int64(seed), np.int64(it), np.int64(STOCHASTIC_CHUNKS), received, counts_out)
+        parallel_for(lambda c0, c1: shoot_stochastic(level.bvh.arrays, recv, src, level.tri_poly, shooters, counts,
+                                                     first, ray_power, np.int64(seed), np.int64(it),
+                                                     np.int64(STOCHASTIC_CHUNKS), received, counts_out, np.int64(c0),
+                                                     np.int64(c1)), 0, STOCHASTIC_CHUNKS, grain=1)
         rays += int(counts_out.sum())
         gained = received.sum(axis=0) / (np.pi * recv.area[:, None])  # power → radiance of the receiving element
         unshot_e = gained
