@@ -23,7 +23,7 @@ from numba.core import event
 
 #: About how long a first run compiles every kernel of a method, the BVH build included, on one of two cores
 #: (`benchmarks/bench_compile.py`, 2026-12-04), when no warm-up has measured it on this machine.
-ESTIMATE_S = {"raycast": 38, "raster": 47, "whitted": 61, "path": 46, "radiosity": 46}
+ESTIMATE_S = {"raycast": 22, "raster": 30, "whitted": 35, "path": 25, "radiosity": 28}
 
 
 #: the file beside the kernels where `lumos warmup` keeps what each kernel family took to compile
