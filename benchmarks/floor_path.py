@@ -45,7 +45,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 import lumos  # noqa: E402
 from lumos import config  # noqa: E402
 from lumos.api import resolve_settings  # noqa: E402
-from lumos.compile import compile_scene  # noqa: E402
+from lumos.methods import compile_for  # noqa: E402
 from lumos.kernels.layout import MAT_KD  # noqa: E402
 from lumos.kernels.surface import surface_at  # noqa: E402
 from lumos.kernels.traverse import any_hit, closest_hit  # noqa: E402
@@ -402,7 +402,7 @@ def main():
     width, height = scene.render.width, scene.render.height
     max_depth = scene.render.max_depth
     rects, boxes, kd, light, camera = scene_arrays(scene)
-    compiled = compile_scene(scene, resolve_settings(scene, {"method": "path"}))
+    compiled = compile_for(scene, resolve_settings(scene, {"method": "path"}))
     out = {name: np.zeros((height, width, 3)) for name in ("floor", "floor+bvh")}
 
     def run_floor(seed):

@@ -143,11 +143,11 @@ def test_replace_emission_needs_no_constant_emission():
 def test_path_leaves_textured_emitters_to_bsdf_rays():
     """Light sampling reads the constant emission, so a textured emitter is not in the emitter table."""
     from lumos.api import resolve_settings
-    from lumos.compile import compile_scene
+    from lumos.methods import compile_for
 
     for scene, textured in ((emissive_scene(), True), (scene_of({"emission": 0.8}), False)):
         s = lumos.load_scene(scene)
-        compiled = compile_scene(s, resolve_settings(s, {"method": "path"}))
+        compiled = compile_for(s, resolve_settings(s, {"method": "path"}))
         assert bool(np.any(compiled.emitters.tri_emit >= 0)) is not textured
 
 

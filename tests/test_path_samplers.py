@@ -17,7 +17,7 @@ import pytest
 from chi2 import chi2_directions, chi2_discrete, frame_z, significance_level
 
 import lumos
-from lumos.compile import compile_scene
+from lumos.methods import compile_for
 from lumos.kernels import bsdf
 from lumos.kernels.emitters import emitter_pdf, sample_emitter
 from lumos.kernels.layout import LIGHT_SPHERE
@@ -251,7 +251,7 @@ def _emitter_pdfs(em, geo, surf, lit, p, dirs):
 
 def _emitter_chi2(scene_objects, lights=(), p=(0.0, 0.0, 0.0), seed=0):
     scene = lumos.load_scene({"objects": list(scene_objects), "lights": list(lights)})
-    compiled = compile_scene(scene, scene.render.model_copy(update={"method": "path"}))
+    compiled = compile_for(scene, scene.render.model_copy(update={"method": "path"}))
     em, sa = compiled.emitters, compiled.arrays
     rng = np.random.default_rng(seed)
     u_pick = rng.random(200_000)
@@ -310,7 +310,7 @@ def test_a_wrong_emitter_pdf_is_detected():
     """The same test, given a pdf that is off by 10% on part of the sphere, fails."""
     objects, lights = EMITTER_CASES["emissive sphere"][0], []
     scene = lumos.load_scene({"objects": objects})
-    compiled = compile_scene(scene, scene.render.model_copy(update={"method": "path"}))
+    compiled = compile_for(scene, scene.render.model_copy(update={"method": "path"}))
     em, sa = compiled.emitters, compiled.arrays
     u_pick = np.random.default_rng(0).random(200_000)
 
@@ -332,7 +332,7 @@ def test_emitters_are_picked_by_power():
         "lights": [{"type": "area", "shape": "rect", "corner": [0, 2, 0], "edge_u": [1, 0, 0], "edge_v": [0, 0, 1],
                     "radiance": 1.0},
                    {"type": "area", "shape": "sphere", "center": [0, 5, 0], "radius": 0.5, "radiance": 3.0}]})
-    compiled = compile_scene(scene, scene.render.model_copy(update={"method": "path"}))
+    compiled = compile_for(scene, scene.render.model_copy(update={"method": "path"}))
     em = compiled.emitters
     power = {"rect": 1.0 * 1.0, "sphere": 3.0 * 4 * math.pi * 0.25, "tri": 2.0 * 1.0}
     total = power["rect"] + power["sphere"] + 2 * power["tri"]

@@ -251,7 +251,7 @@ def test_csg_is_meshed_as_the_raster_draws_it_each_solid_with_its_material():
     """A box with a bite out of it (`compile.csg_mesh`'s boolean mesh): the patches cover its surface once, the
     bite's with the sphere's kd; a glass solid also gets its inside; the solution draws."""
     from lumos.api import resolve_settings
-    from lumos.compile import compile_scene
+    from lumos.methods import compile_for
     from lumos.scene.loader import load_scene
 
     def bitten_box(body):
@@ -264,7 +264,7 @@ def test_csg_is_meshed_as_the_raster_draws_it_each_solid_with_its_material():
 
     scene = load_scene(bitten_box({"kd": 0.5}))
     st = resolve_settings(scene, {"method": "radiosity", "radiosity": {"patch_size": 0.25}})
-    p = compile_scene(scene, st).patches
+    p = compile_for(scene, st).patches
     assert np.all(p.patch_side == 1)  # opaque, seen from outside: no inside patches
     bite = p.reflectance[:, 0] > p.reflectance[:, 1] + 0.5  # red
     assert np.all(np.isclose(p.reflectance[~bite], 0.5))
@@ -272,7 +272,7 @@ def test_csg_is_meshed_as_the_raster_draws_it_each_solid_with_its_material():
     assert p.area[~bite].sum() == pytest.approx(24.0 - math.pi * 0.25, rel=5e-3)
     assert p.area[bite].sum() == pytest.approx(2 * math.pi * 0.25, rel=5e-3)
     glass = load_scene(bitten_box({"kd": 0.1, "kt": 0.8, "ior": 1.5}))
-    q = compile_scene(glass, st).patches
+    q = compile_for(glass, st).patches
     glass_body = q.reflectance[:, 0] < q.reflectance[:, 1] + 0.5
     assert np.all(q.patch_side[~glass_body] == 1) and np.sum(q.patch_side == -1) == np.sum(glass_body) // 2
     img = lumos.render(scene, method="radiosity", width=32, height=24, radiosity={"patch_size": 0.25})
@@ -434,7 +434,7 @@ def test_the_display_carries_a_linear_radiance_to_the_edges_exactly():
     function's own), where plain averaging of the patches meeting at a corner would repeat the edge patches'
     centre values and put the wall's border half a patch too far in."""
     from lumos.api import resolve_settings
-    from lumos.compile import compile_scene
+    from lumos.methods import compile_for
     from lumos.radiosity import display
     from lumos.radiosity.solve import patch_arrays
     from lumos.scene.loader import load_scene
@@ -442,7 +442,7 @@ def test_the_display_carries_a_linear_radiance_to_the_edges_exactly():
     scene = load_scene({"camera": {"position": [0.5, 2, 0.5], "look_at": [0.5, 0, 0.5], "up": [0, 0, -1]},
                         "objects": [square([0, 0, 1], [1, 0, 0], [0, 0, -1], {"kd": 0.5})]})
     st = resolve_settings(scene, {"method": "radiosity", "radiosity": {"patch_size": 0.1}})
-    patches = compile_scene(scene, st).patches
+    patches = compile_for(scene, st).patches
     pa = patch_arrays(patches)
     up = pa.normal[:, 1] > 0.5
     assert up.sum() >= 100
@@ -502,7 +502,7 @@ def test_a_textured_material_takes_part_with_its_textures_mean_colour():
 
     import lumos as _lumos
     from lumos.api import resolve_settings as _resolve
-    from lumos.compile import compile_scene as _compile
+    from lumos.methods import compile_for as _compile_for
 
     scene = _lumos.load_scene({
         "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0]},
@@ -512,6 +512,6 @@ def test_a_textured_material_takes_part_with_its_textures_mean_colour():
                                    "apply_to": ["kd"]}}}]})
     with _w.catch_warnings(record=True) as caught:
         _w.simplefilter("always")
-        patches = _compile(scene, _resolve(scene, dict(method="radiosity"))).patches
+        patches = _compile_for(scene, _resolve(scene, dict(method="radiosity"))).patches
     assert any("mean colour" in str(w.message) for w in caught)
     assert np.allclose(patches.reflectance, [0.4, 0.0, 0.3])

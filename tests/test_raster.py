@@ -16,7 +16,7 @@ from naive import classic_local, inside_polygon, unit
 
 import lumos
 from lumos.api import resolve_settings
-from lumos.compile import compile_scene
+from lumos.methods import compile_for
 from lumos.methods.raster import Rasterizer
 
 MAT = {"ka": [0.2, 0.15, 0.1], "kd": [0.7, 0.5, 0.3], "ks": [0.4, 0.4, 0.4], "shininess": 20.0}
@@ -43,7 +43,7 @@ def mesh_scene(camera, vertices, faces, normals=None, material=None, lights=(), 
 def rasterizer(scene_dict, width, height, cull=False, persp=True, **settings):
     scene = lumos.load_scene(scene_dict)
     cfg = resolve_settings(scene, dict(method="raster", width=width, height=height, **settings))
-    mesh = compile_scene(scene, cfg).raster
+    mesh = compile_for(scene, cfg).raster
     attrs = np.hstack([mesh.positions, mesh.normals])
     return Rasterizer(mesh, attrs, scene.camera, width, height, cull=cull, persp=persp), mesh
 
@@ -467,7 +467,7 @@ def test_polygons_kept_whole_honour_the_crease_angle_and_flat_shades_each_polygo
     cam = {"position": [3.0, 2.5, 4.0], "look_at": [0.0, 0.0, 0.0], "fov": 40.0}
     for triangulate in (False, True):
         scene = lumos.load_scene(mesh_scene(cam, cube_v, cube_f, crease_angle=60, triangulate=triangulate))
-        mesh = compile_scene(scene, resolve_settings(scene, {"method": "raster"})).raster
+        mesh = compile_for(scene, resolve_settings(scene, {"method": "raster"})).raster
         assert len(mesh.positions) == 24  # split: each face its own normals
         assert np.allclose(np.abs(mesh.normals).max(axis=1), 1.0)
         # flat shading: both triangles of a face are shaded at the face's centre with its normal

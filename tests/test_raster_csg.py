@@ -24,7 +24,7 @@ from scipy import ndimage
 import lumos
 from lumos import cli
 from lumos.api import resolve_settings
-from lumos.compile import compile_scene
+from lumos.methods import compile_for
 from lumos.compile.csg_mesh import csg_pieces
 from lumos.compile.tessellate import tessellate_shape
 from lumos.kernels import layout as L
@@ -149,7 +149,7 @@ def test_box_minus_sphere_volume_and_areas_are_the_tessellations(centre):
 def test_cut_face_keeps_the_spheres_material_and_faces_its_centre():
     centre = np.array([0.3, 0.9, 0.2])  # a bite across the top face, cut at no tessellation ring
     scene = lumos.load_scene({"objects": [box_minus_sphere(centre, 0.55)], "render": {"method": "raster"}})
-    compiled = compile_scene(scene, resolve_settings(scene, {}))
+    compiled = compile_for(scene, resolve_settings(scene, {}))
     mesh = compiled.raster
     faces, prim = mesh.triangles()
     kd = compiled.arrays.materials[mesh.prim_info[prim, 0], L.MAT_KD]
@@ -245,6 +245,6 @@ def test_moving_csg_is_drawn_at_time_zero_like_other_moving_shapes():
         sphere = {"type": "sphere", "center": [3, 0, 0], "motion": motion}
         scene = lumos.load_scene({"camera": {"shutter": [0.0, 1.0]}, "objects": [obj, sphere],
                                   "render": {"method": "raster"}})
-        return compile_scene(scene, resolve_settings(scene, {})).raster.positions
+        return compile_for(scene, resolve_settings(scene, {})).raster.positions
 
     assert np.array_equal(raster_positions([0.5, 0.0, 0.0]), raster_positions([0.0, 0.0, 0.0]))

@@ -16,7 +16,7 @@ from PIL import Image as PILImage
 
 import lumos
 from lumos.api import resolve_settings
-from lumos.compile import compile_scene
+from lumos.methods import compile_for
 from lumos.compile.textures import mip_levels
 from lumos.kernels import texture as T
 from lumos.kernels.views import textures_of
@@ -95,7 +95,7 @@ def test_tessellated_sphere_with_an_image_texture_matches_raycast_of_its_polygon
                 "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1.0, "material": material}]}
     scene = lumos.load_scene(analytic)
     cfg = resolve_settings(scene, dict(method="raster", tessellation=64))
-    mesh = compile_scene(scene, cfg).raster
+    mesh = compile_for(scene, cfg).raster
     faces, _ = mesh.triangles()
     polygons = {"camera": CAMERA, "ambient": 0.2, "lights": LIGHTS,
                 "objects": [{"type": "mesh", "vertices": mesh.positions, "faces": faces, "normals": mesh.normals,
@@ -179,7 +179,7 @@ def lookup_table(tmp_path, texture):
     """The compiled texture arrays (mip-mapped) of one material with `texture`, and its tex_info row."""
     scene = lumos.load_scene({"camera": CAMERA, "objects": [
         {"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": {"texture": texture}}]})
-    compiled = compile_scene(scene, resolve_settings(scene, dict(method="raster")))
+    compiled = compile_for(scene, resolve_settings(scene, dict(method="raster")))
     return textures_of(compiled.arrays), 0
 
 

@@ -15,6 +15,7 @@ import pytest
 import lumos
 from lumos.api import scene_info
 from lumos.compile import compile_scene, spot_cos
+from lumos.methods import compile_for
 from lumos.compile.emitters import spot_solid_angle
 from lumos.errors import LumosError
 from lumos.explaining import format_text
@@ -69,7 +70,7 @@ def test_path_picks_a_spot_by_its_power_against_a_point_light():
     s = lumos.load_scene(scene)
     from lumos.api import resolve_settings
 
-    em = compile_scene(s, resolve_settings(s, {"method": "path"})).emitters
+    em = compile_for(s, resolve_settings(s, {"method": "path"})).emitters
     pmf = em.emit_pmf[em.light_emit]
     omega = spot_solid_angle(spot_cos(40.0), spot_cos(25.0))
     assert pmf[1] / pmf[0] == pytest.approx(omega / (4.0 * math.pi), rel=1e-12)

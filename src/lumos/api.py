@@ -16,7 +16,8 @@ import warnings
 from typing import TYPE_CHECKING, Any, Callable, Optional
 
 from .errors import LumosError, LumosWarning
-from .scene.model import PATH_AOVS, TERM_AOVS, RenderSettings, Scene
+from .methods.capabilities import check_settings
+from .scene.model import RenderSettings, Scene
 
 if TYPE_CHECKING:
     from .image import Image
@@ -73,35 +74,8 @@ def resolve_settings(scene: Scene, overrides: dict[str, Any]) -> RenderSettings:
         settings = settings.model_copy(update={"antialias": "supersample", "spp": spp})
         warnings.warn(LumosWarning(f"render.antialias: the scene's adaptive anti-aliasing is whitted's; "
                                    f"{settings.method} supersamples at {spp} spp instead"))
-    check_method_settings(settings)
+    check_settings(settings)
     return settings
-
-
-def check_method_settings(settings: RenderSettings) -> None:
-    """Refuse, with a clear error, a setting the chosen method cannot honour (a path-only setting elsewhere...)."""
-    method = settings.method
-    if method != "path":
-        path_only = [("time_limit", settings.time_limit is not None, "--time-limit"),
-                     ("denoise", settings.denoise, "--denoise"),
-                     ("filter", settings.filter != "box", "--filter"),
-                     ("sampling", settings.sampling != "mis", "--sampling"),
-                     ("sampler", settings.sampler != "sobol", "--sampler")]
-        for key, given, flag in path_only:
-            if given:
-                raise LumosError(f"render.{key}: {flag} is a path feature; method {method} does not take it")
-        for name in PATH_AOVS:
-            if name in settings.aov:
-                raise LumosError(f"render.aov: the {name!r} AOV is made by method path only")
-    if method in ("path", "radiosity"):
-        for name in TERM_AOVS:
-            if name in settings.aov:
-                raise LumosError(f"render.aov: the {name!r} AOV is a term of the classic model, made by raycast, "
-                                 f"raster and whitted; method {method} computes global illumination")
-    if method == "path" and settings.antialias == "adaptive":
-        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; path takes none (pixel "
-                         "centres) or supersample (spp samples spread over each pixel by the filter)")
-    if "noisy" in settings.aov and not settings.denoise:
-        raise LumosError("render.aov: the 'noisy' AOV is the image before denoising; it needs denoise (--denoise)")
 
 
 def _entry_point(name: str) -> Callable:
@@ -125,9 +99,9 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
     `stats` holds the timings: load_s, build_s (flatten + BVH), render_s and total_s, and jit_s, the time
     Numba spent compiling kernels (a first run only), which build_s and render_s exclude.
     """
-    from .compile import compile_scene
     from .compiling import estimate_s, watch_compiles
     from .image import Image
+    from .methods import compile_for
     from .progress import make_progress
     from .scene.loader import load_scene
 
@@ -147,7 +121,7 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
 
     with watch_compiles(on_first=say_compiling) as watch:
         try:
-            compiled = compile_scene(scene, cfg)
+            compiled = compile_for(scene, cfg)
         except LumosError as exc:  # the compile step knows the key path, not the file: name it
             if scene.source is not None and not str(exc).startswith(str(scene.source)):
                 raise LumosError(f"{scene.source}: {exc}") from None

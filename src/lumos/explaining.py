@@ -32,7 +32,7 @@ EXPLAINED = ("raycast", "raster", "whitted")
 def explain(scene, x: int, y: int, **settings) -> dict:
     """What produced pixel (x, y) (column, row from the top left) of `scene` rendered with `settings`."""
     from .api import resolve_settings
-    from .compile import compile_scene
+    from .methods import compile_for
     from .scene.loader import load_scene
 
     scene = load_scene(scene)
@@ -45,7 +45,7 @@ def explain(scene, x: int, y: int, **settings) -> dict:
     for name, v, size in (("x", x, cfg.width), ("y", y, cfg.height)):
         if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or not 0 <= v < size:
             raise LumosError(f"explain: pixel {name} = {v!r} is outside the image (0 to {size - 1})")
-    compiled = compile_scene(scene, cfg)
+    compiled = compile_for(scene, cfg)
     info = {"method": cfg.method, "pixel": [int(x), int(y)], "width": cfg.width, "height": cfg.height,
             "scene": str(scene.source) if getattr(scene, "source", None) is not None else None}
     context = _Context(scene, compiled)
@@ -105,7 +105,7 @@ def _whitted(scene, compiled, cfg, x, y, context) -> dict:
     max_depth = cfg.resolved_max_depth()
     if max_depth is None:
         raise LumosError("render.max_depth: whitted needs a finite number of bounces (-1, unbounded, is for path)")
-    mode = W._ANTIALIAS[cfg.antialias]
+    mode = W.ANTIALIAS_MODES[cfg.antialias]
     spp = 1 if mode == W.AA_NONE else cfg.spp
     points = (2 ** cfg.adaptive_depth + 1) ** 2 if mode == W.AA_ADAPTIVE else spp
     rows = int(min(max(points * (2 ** (min(max_depth, 12) + 1)), 64), 400_000))
@@ -216,12 +216,9 @@ def _raycast(scene, compiled, cfg, x, y, context) -> dict:
 def _raster(scene, compiled, cfg, x, y, context) -> dict:
     from .kernels.illumination import PER_LIGHT_SIZE
     from .methods.common import TERM_CHANNELS, allocate_aovs
-    from .methods.raster import G_NORMAL, G_POS, G_UV, RasterFrame, _view_depth
+    from .methods.raster import G_NORMAL, G_POS, G_UV, RasterFrame, view_depth
     from .scene.model import TERM_AOVS
 
-    if cfg.antialias == "adaptive":
-        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; raster takes none or "
-                         "supersample (spp passes)")
     frame = RasterFrame(compiled, scene.camera, cfg)
     mesh = frame.mesh
     h, w = cfg.height, cfg.width
@@ -263,7 +260,7 @@ def _raster(scene, compiled, cfg, x, y, context) -> dict:
             "index": prim, "object": int(info_row[1]), "object_name": context.object(int(info_row[1])),
             "material": int(info_row[0]), "material_name": context.material(int(info_row[0])),
             "face_normal": _v(mesh.prim_normal[prim]), "vertices": vertices,
-            "depth": float(_view_depth(frame.cam_vecs, frame.ortho, tuple(p))),
+            "depth": float(view_depth(frame.cam_vecs, frame.ortho, tuple(p))),
             "interpolated": {"position": _v(p), "normal": _v(g[G_NORMAL:G_NORMAL + 3])}}
         if frame.uv_at >= 0:
             entry["polygon"]["interpolated"]["uv"] = _v(g[G_UV:G_UV + 2])

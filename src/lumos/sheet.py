@@ -637,10 +637,10 @@ def check_sheet_path(path: str | os.PathLike) -> Path:
 
 def save_sheet(sheet, path: str | os.PathLike) -> Path:
     """Write `sheet` (a PIL image) to `path` atomically, as PNG or JPEG by its extension; returns the path."""
-    from .io.images import _atomic_write
+    from .io.atomic import write_atomically
 
     out = check_sheet_path(path)
     fmt = SHEET_FORMATS[out.suffix.lower()]
     options = {"quality": 95} if fmt == "JPEG" else {}
-    _atomic_write(out, lambda tmp: sheet.save(tmp, format=fmt, **options))
+    write_atomically(out, lambda tmp: sheet.save(tmp, format=fmt, **options), f"cannot write image '{out}'")
     return out

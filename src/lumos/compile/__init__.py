@@ -3,6 +3,10 @@
     compiled = compile_scene(scene)
     compiled.arrays        # kernels.layout.SceneArrays
     compiled.bvh_build_s   # seconds spent in the BVH builder
+
+This package knows no rendering method. What a method needs beyond the flattened scene it asks for itself
+(`methods.compile_for`): the polygons (`compile_raster`), the path tracer's physical materials and emitter table
+(`emitters.attach`), radiosity's patches (`patches.attach`).
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ from ..errors import LumosError
 from ..kernels import layout as L
 from .bvh import build, pack_nodes, packed_leaves, wide_nodes
 from .memory import aligned_zeros
-from .meshprep import prepare_mesh
+from .meshprep import mesh_triangles
 from .raster import RasterMesh, build_raster_mesh
 from .shapes import canonical, frame, rect_canonical, world_bounds
 from .textures import build_textures
@@ -34,7 +38,7 @@ class CompiledScene:
     object_names: list = field(default_factory=list)
     raster: Optional["RasterMesh"] = None  # the polygons, for method raster
     emitters: Optional[L.Emitters] = None  # the lights and emissive primitives, for method path
-    patches: Optional[object] = None  # radiosity.patches.Patches, for method radiosity
+    patches: Optional[object] = None  # compile.patches.Patches, for method radiosity (`compile.patches.attach`)
     digest: str = ""  # radiosity: the fingerprint of the geometry and materials a solution depends on
     material_names: list = field(default_factory=list)  # a name for each material row (messages, explain)
     #: int64 (nt,): for each BVH-ordered triangle, its index in the objects' triangles taken in scene order (each
@@ -117,18 +121,6 @@ class _Shapes:
         return len(self.infos) - 1
 
 
-def _mesh_triangles(obj, world_from_object):
-    """World-space triangle vertices (m, 9), normals (m, 9) or None (facets) and uvs (m, 6) or None of a
-    triangle or mesh object, after the fix-ups its keys ask for."""
-    m = prepare_mesh(obj, world_from_object)
-    faces = m.polygons
-    tri_v = m.vertices[faces].reshape(-1, 9)
-    tri_n = None if m.normals is None else m.normals[faces].reshape(-1, 9)
-    tri_uv = None if m.uvs is None else m.uvs[faces].reshape(-1, 6)
-    tri_t = None if m.tangents is None else m.tangents[faces].reshape(-1, 12)
-    return tri_v, tri_n, tri_uv, tri_t
-
-
 def _lights(scene, materials: _Materials, emitters: list):
     """Light arrays; each area light's emitting shape is appended to `emitters` as (kind, matrix, material, light)."""
     n = len(scene.lights)
@@ -197,14 +189,9 @@ def spot_cos(degrees: float) -> float:
     return 0.0 if degrees == 90.0 else float(np.cos(np.radians(degrees)))
 
 
-def compile_scene(scene, settings=None) -> CompiledScene:
-    """Flatten a validated `Scene` into `SceneArrays` and build its BVH.
-
-    With `settings.method == "raster"` the objects are also turned into polygons (`CompiledScene.raster`), and
-    the BVH holds those same polygons (for the optional shadow rays) instead of the analytic shapes.
-    """
-    if settings is not None and settings.method == "raster":
-        return _compile_raster(scene, settings)
+def compile_scene(scene) -> CompiledScene:
+    """Flatten a validated `Scene` into `SceneArrays` (analytic shapes as themselves, meshes as triangles) and
+    build its BVH."""
     materials = _Materials()
     shapes = _Shapes(scene.camera.shutter)
     tri_parts = []  # (verts, normals, uvs, material, object)
@@ -217,7 +204,7 @@ def compile_scene(scene, settings=None) -> CompiledScene:
             if any(obj.motion):
                 raise LumosError(f"objects[{object_id}].motion: {obj.type} objects cannot move (motion blur is "
                                  "for spheres, boxes, cylinders, cones, disks, rects, planes and csg objects)")
-            tri_v, tri_n, tri_uv, tri_t = _mesh_triangles(obj, world_from_object)
+            tri_v, tri_n, tri_uv, tri_t = mesh_triangles(obj, world_from_object)
             tri_parts.append((tri_v, tri_n, tri_uv, mat, object_id, tri_t))
             continue
         if obj.type == "csg":
@@ -233,40 +220,7 @@ def compile_scene(scene, settings=None) -> CompiledScene:
     lights = _lights(scene, materials, emitters)
     for kind, m, mat, i in emitters:
         shapes.add(kind, m, mat, len(scene.objects) + i, light=i)
-    compiled = _assemble(scene, materials, shapes, tri_parts, lights, names)
-    if settings is not None and settings.method == "radiosity":
-        from ..radiosity.patches import default_patch_size, mesh_scene, usable_bounds
-        from ..radiosity.solve import scene_digest
-
-        rs = settings.radiosity
-        size = rs.patch_size if rs.patch_size is not None else default_patch_size(*usable_bounds(compiled.bounds))
-        compiled.patches = mesh_scene(scene, compiled.bounds, size, settings.tessellation)
-        p = compiled.patches
-        sides = np.unique(np.stack([p.object_id.astype(np.int64), np.sign(p.patch_side).astype(np.int64)]), axis=1)
-        compiled.digest = scene_digest(scene, sides)
-    if settings is not None and settings.method == "path":
-        from .emitters import build_emitters, physical_materials
-
-        rows = physical_materials(_material_names(scene, materials), compiled.arrays.materials)
-        compiled.arrays = compiled.arrays._replace(materials=rows)
-        # emitters whose emission is textured are left to the BSDF rays (light sampling would need the texture
-        # at the sampled point): the table is built as if they did not emit
-        untextured = rows.copy()
-        untextured[_textured_emission(rows, compiled.arrays.tex_info), L.MAT_EMISSION : L.MAT_EMISSION + 3] = 0.0
-        compiled.emitters = build_emitters(compiled.arrays._replace(materials=untextured), compiled.bounds)
-    return compiled
-
-
-def _textured_emission(rows: np.ndarray, tex_info: np.ndarray) -> np.ndarray:
-    """bool (n,): which material rows have a texture applied to their emission."""
-    from ..kernels.texture import APPLY_EMISSION, TEX_APPLY
-
-    out = np.zeros(len(rows), bool)
-    for i, row in enumerate(rows):
-        first, count = int(row[L.MAT_TEXTURE]), int(row[L.MAT_TEXTURE_COUNT])
-        if first >= 0:
-            out[i] = any(int(tex_info[k, TEX_APPLY]) & APPLY_EMISSION for k in range(first, first + count))
-    return out
+    return _assemble(scene, materials, shapes, tri_parts, lights, names)
 
 
 def _material_names(scene, materials: _Materials) -> list[str]:
@@ -278,15 +232,18 @@ def _material_names(scene, materials: _Materials) -> list[str]:
     return [names.get(id(m), "(default)" if m is not None else "(light)") for m in materials.materials]
 
 
-def _compile_raster(scene, settings) -> CompiledScene:
+def compile_raster(scene, tessellation: int, shadows: bool, mipmap: bool) -> CompiledScene:
+    """The scene for scan conversion: its objects as polygons (`CompiledScene.raster`, shapes tessellated with
+    `tessellation` segments) and, for the optional shadow rays (`shadows`), a BVH over those same polygons
+    instead of the analytic shapes; `mipmap`: its textures with mip-map pyramids."""
     materials = _Materials()
     names = [obj.name or f"{obj.type}#{i}" for i, obj in enumerate(scene.objects)]
     object_materials = [materials.add(scene.material_of(obj)) for obj in scene.objects]
     emitters = []
     lights = _lights(scene, materials, emitters)
-    mesh = build_raster_mesh(scene, settings.tessellation, object_materials, emitters, material_row=materials.add)
+    mesh = build_raster_mesh(scene, tessellation, object_materials, emitters, material_row=materials.add)
     tri_parts = []
-    if settings.shadows:  # shadow rays test the polygons the camera sees (area lights cast no shadows)
+    if shadows:  # shadow rays test the polygons the camera sees (area lights cast no shadows)
         faces, prim = mesh.triangles()
         info = mesh.prim_info[prim]
         solid = info[:, 2] < 0
@@ -296,7 +253,7 @@ def _compile_raster(scene, settings) -> CompiledScene:
         for mat, obj in {(int(a), int(b)) for a, b in info[:, :2]}:
             sel = (info[:, 0] == mat) & (info[:, 1] == obj)
             tri_parts.append((verts[sel], None, uvs[sel], mat, obj))
-    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names, mipmaps=settings.mipmap)
+    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names, mipmaps=mipmap)
     compiled.raster = mesh
     return compiled
 

@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import LumosError
 from ..kernels import layout as L
 from ..kernels.csg import CSG_DIFFERENCE, CSG_INTERSECTION, CSG_LEAF, CSG_UNION
+from .meshprep import mesh_triangles
 from .shapes import canonical, world_bounds
 
 _OPS = {"union": CSG_UNION, "intersection": CSG_INTERSECTION, "difference": CSG_DIFFERENCE}
@@ -77,9 +78,7 @@ class _Builder:
     def leaf(self, obj, world_from_object, material, where):
         """(~shape, world bounds) of a solid."""
         if obj.type == "mesh":
-            from . import _mesh_triangles
-
-            verts, _, uvs, _ = _mesh_triangles(obj, world_from_object)
+            verts, _, uvs, _ = mesh_triangles(obj, world_from_object)
             _check_closed(verts, where)
             solid = self.shapes.solid_triangles
             first = sum(len(part[0]) for part in solid)  # relative to the solid triangles; _assemble adds the rest

@@ -209,3 +209,27 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
         shape_emit=shape_emit,
         light_emit=light_emit,
     )
+
+
+def attach(compiled) -> None:
+    """Ready a compiled scene (`compile_scene`) for the path tracer: its material rows read physically
+    (`physical_materials`) and its emitter table (`CompiledScene.emitters`)."""
+    rows = physical_materials(compiled.material_names, compiled.arrays.materials)
+    compiled.arrays = compiled.arrays._replace(materials=rows)
+    # emitters whose emission is textured are left to the BSDF rays (light sampling would need the texture at the
+    # sampled point): the table is built as if they did not emit
+    untextured = rows.copy()
+    untextured[_textured_emission(rows, compiled.arrays.tex_info), L.MAT_EMISSION:L.MAT_EMISSION + 3] = 0.0
+    compiled.emitters = build_emitters(compiled.arrays._replace(materials=untextured), compiled.bounds)
+
+
+def _textured_emission(rows: np.ndarray, tex_info: np.ndarray) -> np.ndarray:
+    """bool (n,): which material rows have a texture applied to their emission."""
+    from ..kernels.texture import APPLY_EMISSION, TEX_APPLY
+
+    out = np.zeros(len(rows), bool)
+    for i, row in enumerate(rows):
+        first, count = int(row[L.MAT_TEXTURE]), int(row[L.MAT_TEXTURE_COUNT])
+        if first >= 0:
+            out[i] = any(int(tex_info[k, TEX_APPLY]) & APPLY_EMISSION for k in range(first, first + count))
+    return out

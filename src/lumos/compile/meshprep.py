@@ -126,3 +126,15 @@ def facet(m: PreparedMesh) -> PreparedMesh:
     else:
         new_polys = np.arange(len(index)).reshape(-1, 3)
     return PreparedMesh(verts, normals, uvs, new_polys, m.groups)
+
+
+def mesh_triangles(obj, world_from_object):
+    """World-space triangle vertices (m, 9), normals (m, 9) or None (facets) and uvs (m, 6) or None of a
+    triangle or mesh object, after the fix-ups its keys ask for."""
+    m = prepare_mesh(obj, world_from_object)
+    faces = m.polygons
+    tri_v = m.vertices[faces].reshape(-1, 9)
+    tri_n = None if m.normals is None else m.normals[faces].reshape(-1, 9)
+    tri_uv = None if m.uvs is None else m.uvs[faces].reshape(-1, 6)
+    tri_t = None if m.tangents is None else m.tangents[faces].reshape(-1, 12)
+    return tri_v, tri_n, tri_uv, tri_t

@@ -37,7 +37,7 @@ from urllib.parse import unquote
 import numpy as np
 
 from ..errors import LumosError
-from .models import ImportedModel
+from .imported import ImportedModel
 
 #: componentType → little-endian dtype
 COMPONENT_TYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}

@@ -17,25 +17,15 @@ format has none).
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import LumosError
+from .imported import ImportedModel
+
+__all__ = ["MODEL_FORMATS", "ImportedModel", "import_model"]
 
 #: Extensions `import_model` reads (case-insensitive).
 MODEL_FORMATS = (".obj", ".gltf", ".glb", ".ply", ".stl", ".off")
-
-
-@dataclass
-class ImportedModel:
-    """A model file read into scene-format pieces (see the module docstring)."""
-
-    source: Path
-    materials: dict[str, dict] = field(default_factory=dict)
-    objects: list[dict] = field(default_factory=list)
-    cameras: list[dict] = field(default_factory=list)
-    lights: list[dict] = field(default_factory=list)
-    warnings: list[str] = field(default_factory=list)
 
 
 def import_model(path: str | os.PathLike) -> ImportedModel:

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import LumosError
 from ..mesh import triangulate, vertex_normals
-from .models import ImportedModel
+from .imported import ImportedModel
 from .mtl import UNDEFINED_MATERIAL, find_file, read_mtl
 from .text import logical_lines
 

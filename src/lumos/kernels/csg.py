@@ -39,7 +39,7 @@ import numpy as np
 
 from .intersect import (
     NO_HIT,
-    _quadratic_roots,
+    quadratic_roots,
     axial_quadratic,
     box_span,
     intersect_triangle,
@@ -120,7 +120,7 @@ def _axial_span(o, d, cone):
         else:
             lo = -c / (2.0 * half_b)
     else:
-        t0, t1 = _quadratic_roots(a, half_b, c)
+        t0, t1 = quadratic_roots(a, half_b, c)
         if not (t0 <= t1):
             return 0.0, 0, 0.0, 0
         if a > 0.0:

@@ -98,7 +98,7 @@ def intersect_triangle(o, setup, v, i, t_max):
 
 #: 1 + 2·γ(3) for float64 (γ(n) = n·u / (1 − n·u), u = 2^-53): scaling t_far by it makes the slab test
 #: conservative (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2)).
-_ROBUST_FAR = 1.0 + 2.0 * (3.0 * 2.0**-53) / (1.0 - 3.0 * 2.0**-53)
+ROBUST_FAR = 1.0 + 2.0 * (3.0 * 2.0**-53) / (1.0 - 3.0 * 2.0**-53)
 
 
 @njit
@@ -129,7 +129,7 @@ def intersect_node_box(box, j, rb, t_max):
     t_near = max(max((f64(box[j, nx]) - ox) * ix, (f64(box[j, ny]) - oy) * iy),
                  max((f64(box[j, nz]) - oz) * iz, 0.0))
     t_far = min(min((f64(box[j, fx]) - ox) * ix, (f64(box[j, fy]) - oy) * iy),
-                (f64(box[j, fz]) - oz) * iz) * _ROBUST_FAR
+                (f64(box[j, fz]) - oz) * iz) * ROBUST_FAR
     if t_near <= min(t_far, t_max):
         return t_near
     return NO_HIT
@@ -139,7 +139,7 @@ def intersect_node_box(box, j, rb, t_max):
 
 
 @njit
-def _quadratic_roots(a, half_b, c):
+def quadratic_roots(a, half_b, c):
     """Roots of a·t² + 2·half_b·t + c = 0, smaller first, in the numerically stable form. (nan, nan) if none."""
     if a == 0.0:
         # linear: a ray parallel to a cone's generator meets the (double) cone once
@@ -162,7 +162,7 @@ def _quadratic_roots(a, half_b, c):
 @njit
 def sphere_roots(o, d):
     """Both roots along the whole line through the unit sphere, smaller first; (nan, nan) if it misses."""
-    return _quadratic_roots(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], o[0] * d[0] + o[1] * d[1] + o[2] * d[2],
+    return quadratic_roots(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], o[0] * d[0] + o[1] * d[1] + o[2] * d[2],
                             o[0] * o[0] + o[1] * o[1] + o[2] * o[2] - 1.0)
 
 
@@ -251,7 +251,7 @@ def _axial(o, d, t_min, t_max, cone, capped):
     a, half_b, c = axial_quadratic(o, d, cone)
     best = t_max
     part = -1
-    t0, t1 = _quadratic_roots(a, half_b, c)
+    t0, t1 = quadratic_roots(a, half_b, c)
     for t in (t0, t1):
         if t_min < t < best:
             z = o[2] + t * d[2]

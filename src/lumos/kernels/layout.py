@@ -195,7 +195,7 @@ Emitters = namedtuple(
         "light_emit",  # int32 (nl,): entry of each light
     ],
 )
-#: Radiosity's patches (`radiosity.patches`), as the solvers' kernels read them (`kernels.radiosity`).
+#: Radiosity's patches (`compile.patches`), as the solvers' kernels read them (`kernels.radiosity`).
 PatchArrays = namedtuple(
     "PatchArrays",
     [

@@ -27,7 +27,7 @@ from .camera import camera_ray_at
 from .csg import csg_leaf, intersect_csg, solid_span
 from .intersect import (
     NO_HIT,
-    _quadratic_roots,
+    quadratic_roots,
     axial_quadratic,
     box_setup,
     intersect_triangle,
@@ -274,7 +274,7 @@ def _shape_crossings(sa, geo, s, o, d, t0, ts, objs, prims, codes, n):
     if kind == SHAPE_CYLINDER or kind == SHAPE_CONE:  # open: the side surface between z = 0 and z = 1
         cone = kind == SHAPE_CONE
         a, half_b, c = axial_quadratic(oc, dc, cone)
-        r0, r1 = _quadratic_roots(a, half_b, c)
+        r0, r1 = quadratic_roots(a, half_b, c)
         for j in range(2):
             t = r0 if j == 0 else r1
             if not (t == t) or (j == 1 and r1 == r0):  # no root (nan), or the single root of a linear case

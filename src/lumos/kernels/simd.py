@@ -22,7 +22,7 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic, overload
 
-from .intersect import _ROBUST_FAR
+from .intersect import ROBUST_FAR
 from .jit import njit_inline
 from .layout import WIDE
 
@@ -69,7 +69,7 @@ def wide_box_test(nodes, j, near_x, near_y, near_z, ox, oy, oz, ix, iy, iz, t_ma
         t_near = max(max((float(row[near_x + k]) - ox) * ix, (float(row[near_y + k]) - oy) * iy),
                      max((float(row[near_z + k]) - oz) * iz, 0.0))
         t_far = min(min((float(row[3 * w - near_x + k]) - ox) * ix, (float(row[5 * w - near_y + k]) - oy) * iy),
-                    (float(row[7 * w - near_z + k]) - oz) * iz) * _ROBUST_FAR
+                    (float(row[7 * w - near_z + k]) - oz) * iz) * ROBUST_FAR
         if entry is not None:
             entry[at + k] = t_near
         if t_near <= min(t_far, t_max):
@@ -127,7 +127,7 @@ def _wide_box_vector(typingctx, nodes, j, near_x, near_y, near_z, ox, oy, oz, ix
                        _vmax(builder, plane(nz_v, oz_v, iz_v), ir.Constant(_F64xW, [0.0] * WIDE)))
         t_far = _vmin(builder, _vmin(builder, plane(far_x, ox_v, ix_v), plane(far_y, oy_v, iy_v)),
                       plane(far_z, oz_v, iz_v))
-        t_far = builder.fmul(t_far, ir.Constant(_F64xW, [_ROBUST_FAR] * WIDE))
+        t_far = builder.fmul(t_far, ir.Constant(_F64xW, [ROBUST_FAR] * WIDE))
         hit = builder.fcmp_ordered("<=", t_near, _vmin(builder, t_far, _splat(builder, tmax_v, WIDE)))
         if store:
             out = context.make_array(signature.args[12])(context, builder, entry_v)

@@ -1,4 +1,25 @@
 """Rendering methods, one module each, each with one public `render_<method>(compiled, camera, settings, progress)`.
 
-The registry that maps names to entry points is `lumos.api.METHODS`.
+The registry that maps names to entry points is `lumos.api.METHODS`; `compile_for` gives each method the compiled
+scene it reads.
 """
+
+
+def compile_for(scene, settings):
+    """`scene` compiled for `settings.method`: the flattened scene and its BVH (`compile.compile_scene`); for
+    raster its polygons instead (`compile.compile_raster`); for path also the physical materials and the emitter
+    table (`compile.emitters.attach`); for radiosity also the patches (`compile.patches.attach`)."""
+    from ..compile import compile_raster, compile_scene
+
+    if settings.method == "raster":
+        return compile_raster(scene, settings.tessellation, settings.shadows, settings.mipmap)
+    compiled = compile_scene(scene)
+    if settings.method == "path":
+        from ..compile import emitters
+
+        emitters.attach(compiled)
+    elif settings.method == "radiosity":
+        from ..compile import patches
+
+        patches.attach(compiled, scene, settings)
+    return compiled

@@ -56,7 +56,7 @@ def row_bands(height: int, bands: int = 48):
     return [(y0, min(height, y0 + step)) for y0 in range(0, height, step)]
 
 
-def _available_memory() -> int | None:
+def available_memory() -> int | None:
     """Bytes the system can give without swapping (MemAvailable counts reclaimable cache; free pages do not)."""
     import os
 
@@ -76,7 +76,7 @@ def _available_memory() -> int | None:
 def check_memory(width: int, height: int, bytes_per_pixel: int = 64) -> None:
     """Refuse images whose buffers would not fit in memory, before allocating anything."""
     need = width * height * bytes_per_pixel
-    avail = _available_memory()
+    avail = available_memory()
     if avail is None:
         return
     if need > 0.8 * avail:

@@ -57,6 +57,7 @@ from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
+from .capabilities import check_settings
 from .common import Film, check_memory, row_bands, set_threads
 
 #: Bounces before Russian roulette may end a path (Mitsuba's default rr_depth).
@@ -460,6 +461,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
     `progress(fraction)` is called after each band of rows; `on_pass(film)` after each pass with the image so far
     (for checkpoints). Stops early after the pass that crosses `settings.time_limit`, or on Ctrl-C."""
     width, height = settings.width, settings.height
+    check_settings(settings)
     check_memory(width, height, bytes_per_pixel=200)
     threads = set_threads(settings.threads)
     cam_vecs, cam_params = camera_arrays(camera)

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import LumosError
 from ..kernels.threads import parallel_for
+from .capabilities import check_settings
 from .common import Film
 from .raster import draw_colours
 
@@ -33,9 +34,7 @@ def render_radiosity(compiled, camera, settings, progress=None, solution=None) -
     from ..radiosity.solve import solve_compiled
     from .common import set_threads
 
-    if settings.antialias == "adaptive":
-        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; radiosity takes none or "
-                         "supersample")
+    check_settings(settings)
     set_threads(settings.threads)  # the solve, too, runs on the threads asked for
     solve_rays = 0
     if solution is None:

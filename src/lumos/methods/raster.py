@@ -24,7 +24,6 @@ from __future__ import annotations
 import numpy as np
 
 from .. import config
-from ..errors import LumosError
 from ..compile.camera import camera_arrays
 from ..kernels import raster as R
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
@@ -37,6 +36,7 @@ from ..kernels.surface import shading_side
 from ..kernels.texture import TEX_SIZE, bump_normal, material_coeffs_filtered
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
+from .capabilities import check_settings
 from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, set_threads, term_aovs
 
 FLAT, GOURAUD, PHONG = 0, 1, 2
@@ -50,7 +50,7 @@ _CHUNK = 2048
 
 
 @njit_inline
-def _view_depth(cam_vecs, ortho, p):
+def view_depth(cam_vecs, ortho, p):
     """The depth AOV of point p: its distance from the eye, or along the view direction for an orthographic
     camera (DESIGN.md's AOV convention, as the ray methods write it)."""
     if ortho:
@@ -298,7 +298,7 @@ def _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_ter
                     terms[y, x, 6 + k] += weight * sp[k]
                     terms[y, x, 9 + k] += weight * e[k]
             if aovs:
-                depth[y, x] = _view_depth(cam_vecs, ortho, p)
+                depth[y, x] = view_depth(cam_vecs, ortho, p)
                 normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_sh
                 albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = kd
                 object_id[y, x] = prim_info[prim, 1]
@@ -458,9 +458,7 @@ class RasterFrame:
 def render_raster(compiled, camera, settings, progress=None) -> Film:
     """Scan-line render `compiled` (a `CompiledScene` compiled for method raster) with `settings`."""
     width, height = settings.width, settings.height
-    if settings.antialias == "adaptive":
-        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; raster takes none or "
-                         "supersample (spp passes)")
+    check_settings(settings)
     check_memory(width, height, bytes_per_pixel=96)
     threads = set_threads(settings.threads)
     frame = RasterFrame(compiled, camera, settings)
@@ -515,7 +513,7 @@ def _shade_colours(ids, gbuf, prim_colour, shading, background, weight, accum, a
                 accum[y, x, c] += weight * v
             if aovs:
                 p = (np.float64(gbuf[y, x, 0]), np.float64(gbuf[y, x, 1]), np.float64(gbuf[y, x, 2]))
-                depth[y, x] = _view_depth(cam_vecs, ortho, p)
+                depth[y, x] = view_depth(cam_vecs, ortho, p)
                 for c in range(3):
                     normal[y, x, c] = gbuf[y, x, G_NORMAL + c]
                     albedo[y, x, c] = prim_albedo[prim, c]

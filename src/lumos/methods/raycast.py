@@ -23,7 +23,7 @@ from ..kernels.texture import bump_frame, bump_normal, material_coeffs
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
-from ..errors import LumosError
+from .capabilities import check_settings
 from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
 
 
@@ -126,9 +126,7 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
     only row y is rendered, and pixel (x, y)'s per-light shares go to light_log (`lumos.explain`).
     """
     width, height = settings.width, settings.height
-    if settings.antialias == "adaptive":
-        raise LumosError("render.antialias: adaptive anti-aliasing is a whitted feature; raycast takes none or "
-                         "supersample (spp jittered samples)")
+    check_settings(settings)
     check_memory(width, height)
     threads = set_threads(settings.threads)
     spp = 1 if settings.antialias == "none" else settings.spp

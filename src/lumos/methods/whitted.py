@@ -48,6 +48,7 @@ from ..kernels.texture import bump_frame, bump_normal, material_coeffs
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, owned_views, surfaces_of, textures_of
 from ..errors import LumosError
+from .capabilities import check_settings
 from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
 
 #: Secondary rays whose path weight (largest channel) is below this are not traced.
@@ -57,7 +58,7 @@ MAX_MEDIA = 4
 #: Random dimension of the shutter time (0–1 pixel position, 2–3 lens).
 DIM_TIME = 4
 AA_NONE, AA_SUPERSAMPLE, AA_ADAPTIVE = 0, 1, 2
-_ANTIALIAS = {"none": AA_NONE, "supersample": AA_SUPERSAMPLE, "adaptive": AA_ADAPTIVE}
+ANTIALIAS_MODES = {"none": AA_NONE, "supersample": AA_SUPERSAMPLE, "adaptive": AA_ADAPTIVE}
 
 
 #: Columns of a ray-tree log row (`lumos.explain`): one row per ray traced from a camera ray.
@@ -635,6 +636,7 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
 def render_whitted(compiled, camera, settings, progress=None) -> Film:
     """Whitted-trace `compiled` (a `CompiledScene`) through `camera` with `settings` (a `RenderSettings`)."""
     width, height = settings.width, settings.height
+    check_settings(settings)
     check_memory(width, height, bytes_per_pixel=80)
     threads = set_threads(settings.threads)
     cam_vecs, cam_params = camera_arrays(camera)
@@ -644,7 +646,7 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
     if settings.resolved_max_depth() is None:
         raise LumosError("render.max_depth: whitted needs a finite number of bounces (-1, unbounded, is for path)")
     max_depth = np.int64(settings.resolved_max_depth())
-    mode = _ANTIALIAS[settings.antialias]
+    mode = ANTIALIAS_MODES[settings.antialias]
     want_terms = any(name in TERM_AOVS for name in settings.aov)
     terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
     radiance = np.zeros((height, width, 3), np.float32)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels.radiosity import gradient_moments, smooth_corners
-from .patches import SMOOTH_COS
+from ..compile.patches import SMOOTH_COS
 
 
 def corner_buckets(patches, pa):

@@ -4,7 +4,7 @@
 
     L_i = E_i + ρ_i · Σ_j F_ij · L_j             E_i = Le_i + (the light of point and directional lights)
 
-Stages: (1) patches (`radiosity.patches`) and a BVH over them for visibility; (2) E: what each patch sends
+Stages: (1) patches (`compile.patches`) and a BVH over them for visibility; (2) E: what each patch sends
 before any interreflection: its own emission plus, for point and directional lights, the first bounce computed
 analytically with shadow rays (DESIGN.md §3's units, so the result agrees with path and whitted); (3) one of
 four solvers (`radiosity.solvers`); (4) the display mesh: radiance averaged to the patches' corners.
@@ -12,8 +12,6 @@ four solvers (`radiosity.solvers`); (4) the display mesh: radiance averaged to t
 
 from __future__ import annotations
 
-import hashlib
-import json
 import time
 from typing import Callable, Optional
 
@@ -22,7 +20,7 @@ import numpy as np
 from ..errors import LumosError
 from ..kernels.threads import parallel_for
 from ..kernels import layout as L
-from .patches import Patches, refine
+from ..compile.patches import Patches, refine
 from .solution import Solution
 
 
@@ -60,34 +58,19 @@ def patch_bvh(p: Patches):
     return compiled, tri_poly
 
 
-def scene_digest(scene, sides=None) -> str:
-    """A fingerprint of what a solution depends on: the objects, lights and materials (not the camera, the
-    image size, the display settings, the background or the ambient term, so a saved solution renders any
-    view), and `sides`: which sides of which objects are patches (the inside of a solid is one only when the
-    camera or a light is in it, so a solution solved from outside a box cannot draw the view from inside)."""
-    data = scene.model_dump(exclude={"camera", "render", "background", "ambient"}, warnings=False)
-    if sides is not None:
-        data["_sides"] = np.asarray(sides)
-
-    def encode(value):  # mesh arrays (from files or inline) by their bytes; paths and the rest as text
-        if isinstance(value, np.ndarray):
-            return hashlib.sha1(np.ascontiguousarray(value).tobytes()).hexdigest() + str(value.shape)
-        return str(value)
-
-    return hashlib.sha1(json.dumps(data, sort_keys=True, default=encode).encode()).hexdigest()
-
-
 def solve(scene, settings=None, progress: Optional[Callable[[float], None]] = None,
           say: Optional[Callable[[str], None]] = None) -> Solution:
     """The radiosity solution of `scene` (a Scene, a dict or a path) with the `radiosity` block of `settings`
     (a RenderSettings; default: the scene's own `render:` block)."""
-    from ..compile import compile_scene
+    from ..compile import compile_scene, patches
     from ..scene.loader import load_scene
 
     scene = load_scene(scene)
     settings = scene.render if settings is None else settings
     settings = settings.model_copy(update={"method": "radiosity"})
-    return solve_compiled(compile_scene(scene, settings), settings, progress, say)
+    compiled = compile_scene(scene)
+    patches.attach(compiled, scene, settings)
+    return solve_compiled(compiled, settings, progress, say)
 
 
 def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:

@@ -69,7 +69,7 @@ class Level:
     recv_patch: np.ndarray  # int64 (n_elements,): the patch each element belongs to
     bvh: object  # CompiledScene of the elements' polygons
     tri_poly: np.ndarray  # int32 (m,): the element polygon of each BVH triangle
-    src_patches: object = None  # radiosity.patches.Patches of the patches (the hemicube renders their polygons)
+    src_patches: object = None  # compile.patches.Patches of the patches (the hemicube renders their polygons)
     recv_patches: object = None  # and of the elements
 
     def patch_means(self, values: np.ndarray) -> np.ndarray:
@@ -106,9 +106,9 @@ def run(rs, level: Level, sent, seed, progress=None, say=None) -> Result:
 
 def matrix_limit() -> int:
     """The most patches whose float32 form-factor matrix fits in MATRIX_MEMORY_SHARE of the free memory."""
-    from ..methods.common import _available_memory
+    from ..methods.common import available_memory
 
-    avail = _available_memory() or (8 << 30)
+    avail = available_memory() or (8 << 30)
     return int(np.sqrt(MATRIX_MEMORY_SHARE * avail / 4))
 
 

@@ -258,11 +258,11 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     the compile step's (`CompiledScene.bounds`), to which planes are clipped."""
     import warnings
 
-    from ..compile.csg_mesh import csg_pieces
-    from ..compile.meshprep import prepare_mesh
-    from ..compile.shapes import canonical, frame
-    from ..compile.tessellate import tessellate_object
-    from ..compile.textures import mean_coefficients
+    from .csg_mesh import csg_pieces
+    from .meshprep import prepare_mesh
+    from .shapes import canonical, frame
+    from .tessellate import tessellate_object
+    from .textures import mean_coefficients
     from ..errors import LumosWarning
 
     lo, hi = usable_bounds(bounds)
@@ -510,3 +510,16 @@ def refine(p: Patches, split_poly: np.ndarray) -> tuple[Patches, np.ndarray]:
         normal=p.normal[parent], reflectance=p.reflectance[parent], emission=p.emission[parent],
         object_id=p.object_id[parent], material=p.material[parent], smooth_group=p.smooth_group[parent],
         optics=p.optics[parent]), parent
+
+
+def attach(compiled, scene, settings) -> None:
+    """Ready a compiled scene (`compile_scene`) for radiosity: its patches (`CompiledScene.patches`, meshed at
+    `settings.radiosity.patch_size`, or a size from the scene's bounds, with `settings.tessellation` segments on
+    curved shapes) and the digest of what a solution of it depends on (`scene.digest`)."""
+    from ..scene.digest import scene_digest
+
+    rs = settings.radiosity
+    size = rs.patch_size if rs.patch_size is not None else default_patch_size(*usable_bounds(compiled.bounds))
+    compiled.patches = p = mesh_scene(scene, compiled.bounds, size, settings.tessellation)
+    sides = np.unique(np.stack([p.object_id.astype(np.int64), np.sign(p.patch_side).astype(np.int64)]), axis=1)
+    compiled.digest = scene_digest(scene, sides)
