@@ -93,6 +93,7 @@ def test_the_closure_of_a_kernel_holds_what_it_inlines_and_nothing_else():
     assert {"methods/path.py", "kernels/sobol.py", "kernels/bsdf.py"} <= pt and "methods/raycast.py" not in pt
 
 
+@pytest.mark.slow
 def test_a_changed_source_byte_in_the_closure_recompiles_and_an_unrelated_one_does_not(tmp_path):
     write_package(tmp_path)
     cache_dir = tmp_path / "cache"
@@ -123,6 +124,7 @@ def test_the_cache_moves_with_its_folder(tmp_path):
     assert again["compiled"] == [] and again["value"] == 60.0
 
 
+@pytest.mark.slow
 def test_parallel_writers_of_one_index_lose_no_entry(tmp_path):
     """Four processes compile four signatures of one kernel into one index at once; a fifth loads all four."""
     write_package(tmp_path)

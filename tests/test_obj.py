@@ -430,6 +430,7 @@ def test_missing_file_and_directory():
         import_obj(DATA)
 
 
+@pytest.mark.slow
 def test_a_million_lines_take_seconds_not_minutes(tmp_path):
     # Not a timing assertion: a 250k-vertex, 250k-face file must simply finish (a per-line NumPy call would not).
     n = 250_000

@@ -209,6 +209,7 @@ def test_the_four_solvers_agree(cornell_solutions):
         assert np.median(rel) < tol, (name, np.median(rel))
 
 
+@pytest.mark.slow
 def test_stochastic_error_falls_as_one_over_root_n():
     """The Monte Carlo solver's error in the furnace (exact answer Le/(1 − ρ) on every inner patch) over ray
     budgets 4× apart: log(error) against log(rays) has slope −1/2 (within 0.12)."""
@@ -316,6 +317,7 @@ def test_refined_cornell_box_is_within_two_percent_of_the_path_tracer():
     assert mre < 0.02, mre
 
 
+@pytest.mark.slow
 def test_point_light_first_bounce_agrees_with_path():
     """Point and directional lights shoot their first bounce analytically (DESIGN.md §3's units): a diffuse
     room lit by them has radiosity's radiance where path puts it (patch means against path's pixel means on
@@ -413,6 +415,7 @@ def test_adaptive_subdivision_refines_where_the_radiance_varies():
     assert errors[True] < 0.8 * errors[False], errors
 
 
+@pytest.mark.slow
 def test_a_mesh_file_scene_solves_and_draws(tmp_path):
     """A scene with a mesh from a file (NumPy arrays in the scene model) and an infinite plane (clipped to the
     bounds) under a point light."""
