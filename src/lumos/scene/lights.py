@@ -1,0 +1,144 @@
+"""Lights: point, spot and directional lights, and area lights (rect, disk, sphere).
+
+Part of the scene model (`lumos.scene.model`, which re-exports every public name).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Optional, Union
+
+from pydantic import Discriminator, Field, Tag, field_validator, model_validator
+
+from .types import Color, Direction, NonNegative, Positive, StrictModel, Vec3, cross, norm
+
+
+class _LocalLight(StrictModel):
+    """Id and Is of the classic model: `intensity` sets both; `diffuse` / `specular` override one."""
+
+    intensity: Color = (1.0, 1.0, 1.0)
+    diffuse: Optional[Color] = None
+    specular: Optional[Color] = None
+
+    @property
+    def diffuse_intensity(self):
+        return self.diffuse if self.diffuse is not None else self.intensity
+
+    @property
+    def specular_intensity(self):
+        return self.specular if self.specular is not None else self.intensity
+
+
+class _PositionedLight(_LocalLight):
+    """A light at a point, dimmed by distance: `att(d) = c + l·d + q·d²` from `attenuation: [c, l, q]`."""
+
+    position: Vec3
+    attenuation: tuple[NonNegative, NonNegative, NonNegative] = (1.0, 0.0, 0.0)
+
+    @field_validator("attenuation", mode="before")
+    @classmethod
+    def _att_tuple(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @model_validator(mode="after")
+    def _check(self):
+        if sum(self.attenuation) <= 0:
+            raise ValueError("attenuation [c, l, q] must not be all zero")
+        return self
+
+
+class PointLight(_PositionedLight):
+    """Shines equally in every direction."""
+
+    type: Literal["point"]
+
+
+class SpotLight(_PositionedLight):
+    """A point light limited to a cone about `direction`: full intensity within `inner_angle` of the axis, none
+    beyond `angle`, and between them the factor s² with s = (cosθ − cos angle)/(cos inner_angle − cos angle)
+    (glTF KHR_lights_punctual's recommended falloff; angles are half-angles in degrees)."""
+
+    type: Literal["spot"]
+    direction: Direction
+    angle: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False)] = 45.0
+    inner_angle: Annotated[float, Field(ge=0, le=90, allow_inf_nan=False)] = 0.0
+
+    @model_validator(mode="after")
+    def _check_cone(self):
+        if self.inner_angle > self.angle:
+            raise ValueError(f"inner_angle ({self.inner_angle:g}) must not exceed angle ({self.angle:g})")
+        return self
+
+
+class DirectionalLight(_LocalLight):
+    """A parallel light travelling along `direction` (so L = −direction)."""
+
+    type: Literal["directional"]
+    direction: Direction
+
+
+class _AreaLight(StrictModel):
+    type: Literal["area"]
+    radiance: Color = (1.0, 1.0, 1.0)
+    samples: Annotated[int, Field(ge=1, le=4096)] = 16
+
+
+class RectLight(_AreaLight):
+    """Emits on the side of cross(edge_u, edge_v) only."""
+
+    shape: Literal["rect"]
+    corner: Vec3
+    edge_u: Vec3
+    edge_v: Vec3
+
+    @model_validator(mode="after")
+    def _check(self):
+        if norm(cross(self.edge_u, self.edge_v)) <= 1e-18:
+            raise ValueError("edge_u and edge_v must be non-zero and not parallel")
+        return self
+
+
+class DiskLight(_AreaLight):
+    """Emits on the side of `normal` only."""
+
+    shape: Literal["disk"]
+    center: Vec3
+    normal: Direction
+    radius: Positive
+
+
+class SphereLight(_AreaLight):
+    """Emits outward from its whole surface."""
+
+    shape: Literal["sphere"]
+    center: Vec3
+    radius: Positive
+
+
+def _light_tag(value: Any) -> Optional[str]:
+    if not isinstance(value, dict):
+        return None
+    kind = value.get("type")
+    if kind == "area":
+        shape = value.get("shape")
+        return f"area.{shape}" if shape in ("rect", "disk", "sphere") else "area.?"
+    return kind if isinstance(kind, str) else None
+
+
+Light = Annotated[
+    Union[
+        Annotated[PointLight, Tag("point")],
+        Annotated[SpotLight, Tag("spot")],
+        Annotated[DirectionalLight, Tag("directional")],
+        Annotated[RectLight, Tag("area.rect")],
+        Annotated[DiskLight, Tag("area.disk")],
+        Annotated[SphereLight, Tag("area.sphere")],
+    ],
+    Discriminator(
+        _light_tag,
+        custom_error_type="light_type",
+        custom_error_message=(
+            "lights need type: point, spot, directional or area (area needs shape: rect, disk or sphere)"
+        ),
+    ),
+]
+LIGHT_TYPES = ("point", "spot", "directional", "area")
