@@ -101,6 +101,7 @@ def _per_light(rows, context) -> list:
 def _whitted(scene, compiled, cfg, x, y, context) -> dict:
     from .compile.camera import camera_arrays
     from .methods import whitted as W
+    from .methods import whitted_trace as T
 
     max_depth = cfg.resolved_max_depth()
     if max_depth is None:
@@ -120,15 +121,15 @@ def _whitted(scene, compiled, cfg, x, y, context) -> dict:
              for r in range(used)]
     samples = []
     for r in range(used):
-        parent = int(log[r, W.LOG_PARENT])
+        parent = int(log[r, T.LOG_PARENT])
         if parent >= 0:
             nodes[parent]["children"].append(nodes[r])
     for r in range(used):
-        if log[r, W.LOG_DEPTH] == 0 and weight[r] > 0.0:
+        if log[r, T.LOG_DEPTH] == 0 and weight[r] > 0.0:
             _radiance(nodes[r])
             sample = {"weight": float(weight[r]), "value": nodes[r]["radiance"], "ray": nodes[r]}
             if mode == W.AA_ADAPTIVE:
-                sample["image_point"] = [float(log[r, W.LOG_FX]), float(log[r, W.LOG_FY])]
+                sample["image_point"] = [float(log[r, T.LOG_FX]), float(log[r, T.LOG_FY])]
             samples.append(sample)
     total = np.zeros(3)
     for s in samples:
@@ -140,29 +141,29 @@ def _whitted(scene, compiled, cfg, x, y, context) -> dict:
 
 
 def _whitted_node(row, lights, context) -> dict:
-    from .methods import whitted as W
+    from .methods import whitted_trace as T
 
-    kind = ("camera", "reflected", "transmitted")[int(row[W.LOG_KIND])]
-    node = {"kind": kind, "depth": int(row[W.LOG_DEPTH]), "origin": _v(row[W.LOG_ORIGIN:W.LOG_ORIGIN + 3]),
-            "direction": _v(row[W.LOG_DIR:W.LOG_DIR + 3]), "path_weight": _v(row[W.LOG_WEIGHT:W.LOG_WEIGHT + 3]),
+    kind = ("camera", "reflected", "transmitted")[int(row[T.LOG_KIND])]
+    node = {"kind": kind, "depth": int(row[T.LOG_DEPTH]), "origin": _v(row[T.LOG_ORIGIN:T.LOG_ORIGIN + 3]),
+            "direction": _v(row[T.LOG_DIR:T.LOG_DIR + 3]), "path_weight": _v(row[T.LOG_WEIGHT:T.LOG_WEIGHT + 3]),
             "hit": None, "children": []}
-    if row[W.LOG_T] < 0.0:
-        node["background"] = _v(row[W.LOG_BACKGROUND:W.LOG_BACKGROUND + 3])
+    if row[T.LOG_T] < 0.0:
+        node["background"] = _v(row[T.LOG_BACKGROUND:T.LOG_BACKGROUND + 3])
         return node
-    obj, mat = int(row[W.LOG_OBJECT]), int(row[W.LOG_MATERIAL])
-    hit = {"t": float(row[W.LOG_T]), "object": obj, "object_name": context.object(obj), "material": mat,
-           "material_name": context.material(mat), "point": _v(row[W.LOG_POINT:W.LOG_POINT + 3]),
-           "normal": _v(row[W.LOG_NORMAL:W.LOG_NORMAL + 3]), "geometric_normal": _v(row[W.LOG_NGEO:W.LOG_NGEO + 3]),
-           "entering": bool(row[W.LOG_ENTERING]), "uv": _v(row[W.LOG_UV:W.LOG_UV + 2]),
-           "ka": _v(row[W.LOG_KA:W.LOG_KA + 3]), "kd": _v(row[W.LOG_KD:W.LOG_KD + 3]),
-           "ks": _v(row[W.LOG_KS:W.LOG_KS + 3]),
-           "emitted": _v(row[W.LOG_EMITTED:W.LOG_EMITTED + 3]), "ambient": _v(row[W.LOG_AMBIENT:W.LOG_AMBIENT + 3]),
-           "diffuse": _v(row[W.LOG_DIFFUSE:W.LOG_DIFFUSE + 3]),
-           "specular": _v(row[W.LOG_SPECULAR:W.LOG_SPECULAR + 3]), "lights": _per_light(lights, context),
-           "reflected_weight": _v(row[W.LOG_WR:W.LOG_WR + 3]), "transmitted_weight": _v(row[W.LOG_WT:W.LOG_WT + 3]),
-           "eta": float(row[W.LOG_ETA]) if row[W.LOG_ETA] > 0.0 else None,
-           "fresnel": float(row[W.LOG_FRESNEL]) if row[W.LOG_FRESNEL] >= 0.0 else None,
-           "total_internal_reflection": bool(row[W.LOG_TIR])}
+    obj, mat = int(row[T.LOG_OBJECT]), int(row[T.LOG_MATERIAL])
+    hit = {"t": float(row[T.LOG_T]), "object": obj, "object_name": context.object(obj), "material": mat,
+           "material_name": context.material(mat), "point": _v(row[T.LOG_POINT:T.LOG_POINT + 3]),
+           "normal": _v(row[T.LOG_NORMAL:T.LOG_NORMAL + 3]), "geometric_normal": _v(row[T.LOG_NGEO:T.LOG_NGEO + 3]),
+           "entering": bool(row[T.LOG_ENTERING]), "uv": _v(row[T.LOG_UV:T.LOG_UV + 2]),
+           "ka": _v(row[T.LOG_KA:T.LOG_KA + 3]), "kd": _v(row[T.LOG_KD:T.LOG_KD + 3]),
+           "ks": _v(row[T.LOG_KS:T.LOG_KS + 3]),
+           "emitted": _v(row[T.LOG_EMITTED:T.LOG_EMITTED + 3]), "ambient": _v(row[T.LOG_AMBIENT:T.LOG_AMBIENT + 3]),
+           "diffuse": _v(row[T.LOG_DIFFUSE:T.LOG_DIFFUSE + 3]),
+           "specular": _v(row[T.LOG_SPECULAR:T.LOG_SPECULAR + 3]), "lights": _per_light(lights, context),
+           "reflected_weight": _v(row[T.LOG_WR:T.LOG_WR + 3]), "transmitted_weight": _v(row[T.LOG_WT:T.LOG_WT + 3]),
+           "eta": float(row[T.LOG_ETA]) if row[T.LOG_ETA] > 0.0 else None,
+           "fresnel": float(row[T.LOG_FRESNEL]) if row[T.LOG_FRESNEL] >= 0.0 else None,
+           "total_internal_reflection": bool(row[T.LOG_TIR])}
     hit["local"] = _v(np.sum([hit[k] for k in ("emitted", "ambient", "diffuse", "specular")], axis=0))
     node["hit"] = hit
     return node

@@ -1,0 +1,319 @@
+"""The Whitted integrator (`trace`): one camera ray's radiance, recursing at each hit into shadow, reflected and
+transmitted rays on an explicit stack, with its terms and, for `lumos.explain`, its ray tree logged (see
+`methods.whitted` for the model). Shared by whitted's samplers: supersampling (`whitted`) and adaptive
+subdivision (`adaptive`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import config
+from ..kernels.camera import camera_ray_at
+from ..kernels.cutout import closest_visible_hit
+from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
+from ..kernels.jit import njit, njit_alloc, njit_inline
+from ..kernels.layout import LIGHT_SPHERE, MAT_FRESNEL, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS
+from ..kernels.optics import reflect, refract, schlick
+from ..kernels.rng import rand01
+from ..kernels.surface import offset_origin, shading_side, surface_at
+from ..kernels.texture import bump_frame, bump_normal, material_coeffs
+
+#: Secondary rays whose path weight (largest channel) is below this are not traced.
+CUTOFF = 1e-3
+#: Nesting depth of the media a ray can be inside (a glass in water in a tank...).
+MAX_MEDIA = 4
+#: Random dimension of the shutter time (0–1 pixel position, 2–3 lens).
+DIM_TIME = 4
+
+
+#: Columns of a ray-tree log row (`lumos.explain`): one row per ray traced from a camera ray.
+LOG_PARENT, LOG_KIND, LOG_DEPTH, LOG_ORIGIN, LOG_DIR, LOG_WEIGHT, LOG_T, LOG_OBJECT, LOG_MATERIAL = 0, 1, 2, 3, 6, 9, 12, 13, 14
+LOG_POINT, LOG_NORMAL, LOG_NGEO, LOG_AMBIENT, LOG_DIFFUSE, LOG_SPECULAR, LOG_EMITTED = 15, 18, 21, 24, 27, 30, 33
+LOG_WR, LOG_WT, LOG_ENTERING, LOG_ETA, LOG_FRESNEL, LOG_TIR, LOG_BACKGROUND, LOG_UV = 36, 39, 42, 43, 44, 45, 46, 49
+LOG_KA, LOG_KD, LOG_KS, LOG_TIME, LOG_FX, LOG_FY = 51, 54, 57, 60, 61, 62
+LOG_COLS = 63
+#: Ray kinds in the log (LOG_KIND), and the branch of the tree a ray is in (the term its light counts for).
+RAY_CAMERA, RAY_REFLECTED, RAY_TRANSMITTED = 0, 1, 2
+#: Term channels (as `common.TERM_CHANNELS`): ambient, diffuse, specular, emitted, reflected, transmitted.
+T_AMBIENT, T_DIFFUSE, T_SPECULAR, T_EMITTED, T_REFLECTED, T_TRANSMITTED = 0, 3, 6, 9, 12, 15
+
+
+@njit_alloc
+def trace_scratch(max_depth, log_rows=0, n_lights=0, terms=False):
+    """Per-thread work arrays for `trace`: the ray stack (origin, direction, weight; depth, media count, branch,
+    log row of the ray that spawned it; media objects and indices of refraction), the BVH traversal stack,
+    the sample's terms (18: see T_*; `terms` False: none kept, an empty array), and the ray-tree log (`log_rows` rows, none by default; its count is −1
+    when logging is off) with each logged hit's per-light shares (`illuminate_terms`' per_light, for
+    `n_lights` lights)."""
+    size = 2 * max_depth + 4  # depth-first: at most one pending sibling per level, plus the ray in hand
+    log_n = np.full(1, -1 if log_rows == 0 else 0, np.int64)
+    return (np.empty((size, 9)), np.empty((size, 4), np.int64), np.empty((size, MAX_MEDIA), np.int64),
+            np.empty((size, MAX_MEDIA)), np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK),
+            np.zeros(18 if terms else 0), np.zeros((max(log_rows, 1), LOG_COLS)), log_n,
+            np.zeros((max(log_rows, 1) * max(n_lights, 1), PER_LIGHT_SIZE)), np.int64(max(n_lights, 1)))
+
+
+@njit
+def _push(st_f, st_i, st_mo, st_mi, sp, o, d, w0, w1, w2, depth, n_media, src_mo, src_mi, src, drop, add_obj, add_ior,
+          branch, parent):
+    """Push a ray; its media are those of stack entry `src` (already popped, still readable) without object
+    `drop` (>= 0) and with (add_obj, add_ior) appended (add_obj >= 0). `branch` is the kind of the camera
+    ray's child it descends from (the term it counts for); `parent` the log row of the ray that spawned it
+    (the kind of the ray itself is in the sign: >= 0 reflected, < 0 transmitted, parent = ~value)."""
+    st_f[sp, 0], st_f[sp, 1], st_f[sp, 2] = o
+    st_f[sp, 3], st_f[sp, 4], st_f[sp, 5] = d
+    st_f[sp, 6], st_f[sp, 7], st_f[sp, 8] = w0, w1, w2
+    st_i[sp, 0] = depth
+    st_i[sp, 2] = branch
+    st_i[sp, 3] = parent
+    m = 0
+    for k in range(n_media):
+        if src_mo[src, k] == drop:
+            drop = -2  # remove one occurrence only
+            continue
+        st_mo[sp, m] = src_mo[src, k]
+        st_mi[sp, m] = src_mi[src, k]
+        m += 1
+    if add_obj >= 0 and m < MAX_MEDIA:
+        st_mo[sp, m] = add_obj
+        st_mi[sp, m] = add_ior
+        m += 1
+    st_i[sp, 1] = m
+    return sp + 1
+
+
+@njit_inline
+def _log3(log, row, col, v):
+    log[row, col] = v[0]
+    log[row, col + 1] = v[1]
+    log[row, col + 2] = v[2]
+
+
+@njit_inline
+def _add_term(tacc, k, w0, w1, w2, c):
+    tacc[k] += w0 * c[0]
+    tacc[k + 1] += w1 * c[1]
+    tacc[k + 2] += w2 * c[2]
+
+
+@njit_inline
+def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scratch, background):
+    """Radiance along the camera ray (o, d) at shutter time `time`.
+
+    Returns (rgb, rays traced, (t, n_shading, kd, object id) of the primary hit; t = −1 on a miss). The
+    sample's terms are left in scratch[6] (T_*: the primary hit's ambient, diffuse, specular and emitted light
+    (or the background it misses into), and the light of its reflected and transmitted rays); with logging on,
+    one row per ray in scratch[7] (LOG_*)."""
+    st_f, st_i, st_mo, st_mi, stack, stack_t, tacc, log, log_n, light_log, light_stride = scratch
+    logging = log_n[0] >= 0
+    keep_terms = tacc.shape[0] > 0
+    for k in range(tacc.shape[0]):  # element by element: device code makes no array views (kernels.jit)
+        tacc[k] = 0.0
+    r = g = b = 0.0
+    rays = 0
+    aov_t = -1.0
+    aov_n = (0.0, 0.0, 0.0)
+    aov_kd = (0.0, 0.0, 0.0)
+    aov_obj = -1
+    # the camera ray: weight 1, depth 0, in air
+    st_f[0, 0], st_f[0, 1], st_f[0, 2] = o
+    st_f[0, 3], st_f[0, 4], st_f[0, 5] = d
+    st_f[0, 6] = st_f[0, 7] = st_f[0, 8] = 1.0
+    st_i[0, 0] = 0
+    st_i[0, 1] = 0
+    st_i[0, 2] = RAY_CAMERA
+    st_i[0, 3] = ~np.int64(-1)
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        top = sp
+        ro = (st_f[top, 0], st_f[top, 1], st_f[top, 2])
+        rd = (st_f[top, 3], st_f[top, 4], st_f[top, 5])
+        w0, w1, w2 = st_f[top, 6], st_f[top, 7], st_f[top, 8]
+        depth = st_i[top, 0]
+        n_media = st_i[top, 1]
+        branch = st_i[top, 2]
+        row = -1
+        if logging and log_n[0] < log.shape[0]:
+            row = log_n[0]
+            log_n[0] += 1
+            for k in range(LOG_COLS):
+                log[row, k] = 0.0
+            code = st_i[top, 3]
+            log[row, LOG_PARENT] = -1 if depth == 0 else (code if code >= 0 else ~code)
+            log[row, LOG_KIND] = RAY_CAMERA if depth == 0 else (RAY_REFLECTED if code >= 0 else RAY_TRANSMITTED)
+            log[row, LOG_DEPTH] = depth
+            _log3(log, row, LOG_ORIGIN, ro)
+            _log3(log, row, LOG_DIR, rd)
+            _log3(log, row, LOG_WEIGHT, (w0, w1, w2))
+            log[row, LOG_T] = -1.0
+            log[row, LOG_OBJECT] = -1
+            log[row, LOG_MATERIAL] = -1
+            log[row, LOG_FRESNEL] = -1.0
+            log[row, LOG_TIME] = time
+        # where this ray's light counts: the primary hit's own terms, or the reflected / transmitted term
+        k_light = T_REFLECTED if branch == RAY_REFLECTED else T_TRANSMITTED
+        hit = closest_visible_hit(geo, surf, lit, ro, rd, 0.0, config.T_FAR, stack, stack_t, time)
+        rays += 1
+        t = hit[0]
+        if t < 0.0:
+            r += w0 * background[0]
+            g += w1 * background[1]
+            b += w2 * background[2]
+            if keep_terms:
+                _add_term(tacc, T_EMITTED if depth == 0 else k_light, w0, w1, w2, background)
+            if row >= 0:
+                _log3(log, row, LOG_BACKGROUND, background)
+            continue
+        ref = hit[1]
+        p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, ro, rd, t, ref, hit[2], hit[3], hit[4], time)
+        mat = lit.materials[mat_id]
+        V = (-rd[0], -rd[1], -rd[2])
+        entering = n_geo[0] * rd[0] + n_geo[1] * rd[1] + n_geo[2] * rd[2] < 0.0
+        if mat[MAT_BUMP] >= 0.0:
+            dpdu, dpdv = bump_frame(surf, tex, mat, ref, hit[4], hit[2], hit[3], p, n_sh, time)
+            n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
+        n_s = shading_side(n_sh, n_geo, V)
+        n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
+        # emitted light: one-sided for rect and disk area lights
+        ka, kd, ks, kr, ke = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
+        e = (0.0, 0.0, 0.0)
+        if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or entering:
+            e = ke
+        kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
+        if depth == 0:
+            aov_t, aov_n, aov_kd, aov_obj = t, n_s, kd, obj
+        la, ld, ls, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, mat[MAT_SHININESS],
+                                             seed, pixel, sample, True, stack, stack_t, time,
+                                             light_log, row * light_stride if row >= 0 else -1)
+        rays += extra
+        r += w0 * (e[0] + la[0] + ld[0] + ls[0])
+        g += w1 * (e[1] + la[1] + ld[1] + ls[1])
+        b += w2 * (e[2] + la[2] + ld[2] + ls[2])
+        if not keep_terms:
+            pass
+        elif depth == 0:
+            _add_term(tacc, T_EMITTED, 1.0, 1.0, 1.0, e)
+            _add_term(tacc, T_AMBIENT, 1.0, 1.0, 1.0, la)
+            _add_term(tacc, T_DIFFUSE, 1.0, 1.0, 1.0, ld)
+            _add_term(tacc, T_SPECULAR, 1.0, 1.0, 1.0, ls)
+        else:
+            _add_term(tacc, k_light, w0, w1, w2, (e[0] + la[0] + ld[0] + ls[0], e[1] + la[1] + ld[1] + ls[1],
+                                                  e[2] + la[2] + ld[2] + ls[2]))
+        if row >= 0:
+            log[row, LOG_T] = t
+            log[row, LOG_OBJECT] = obj
+            log[row, LOG_MATERIAL] = mat_id
+            _log3(log, row, LOG_POINT, p)
+            _log3(log, row, LOG_NORMAL, n_s)
+            _log3(log, row, LOG_NGEO, n_g)
+            _log3(log, row, LOG_AMBIENT, la)
+            _log3(log, row, LOG_DIFFUSE, ld)
+            _log3(log, row, LOG_SPECULAR, ls)
+            _log3(log, row, LOG_EMITTED, e)
+            _log3(log, row, LOG_KA, ka)
+            _log3(log, row, LOG_KD, kd)
+            _log3(log, row, LOG_KS, ks)
+            log[row, LOG_UV] = u
+            log[row, LOG_UV + 1] = v
+            log[row, LOG_ENTERING] = 1.0 if entering else 0.0
+            _log3(log, row, LOG_WR, kr)  # the material's; Fresnel and total internal reflection adjust them below
+            _log3(log, row, LOG_WT, kt)
+        if depth >= max_depth:
+            continue
+        # the weights of the two secondary rays
+        wr0, wr1, wr2 = kr
+        wt0, wt1, wt2 = kt
+        transmit = wt0 > 0.0 or wt1 > 0.0 or wt2 > 0.0
+        t_dir = rd
+        drop, add_obj, add_ior = np.int64(-1), np.int64(-1), 1.0
+        if transmit and is_solid(surf, ref):
+            # the media on both sides of this surface
+            n_out = st_mi[top, n_media - 1] if n_media > 0 else 1.0
+            if entering:
+                n1, n2 = n_out, mat[MAT_IOR]
+                add_obj, add_ior = np.int64(obj), mat[MAT_IOR]
+            else:
+                n1 = n_out
+                n2 = 1.0
+                found = False
+                for k in range(n_media - 1, -1, -1):  # the innermost medium once obj is left
+                    if st_mo[top, k] == obj and not found:
+                        found = True
+                        continue
+                    n2 = st_mi[top, k]
+                    break
+                drop = np.int64(obj)
+            eta = n1 / n2
+            cos_i = -(rd[0] * n_s[0] + rd[1] * n_s[1] + rd[2] * n_s[2])
+            ok, t_dir = refract(rd, n_s, eta)
+            if row >= 0:
+                log[row, LOG_ETA] = eta
+                log[row, LOG_TIR] = 0.0 if ok else 1.0
+            if mat[MAT_FRESNEL] != 0.0:
+                if ok:
+                    cos_t = -(t_dir[0] * n_s[0] + t_dir[1] * n_s[1] + t_dir[2] * n_s[2])
+                    F = schlick(max(cos_i, 0.0), eta, max(cos_t, 0.0))
+                else:
+                    F = 1.0
+                if row >= 0:
+                    log[row, LOG_FRESNEL] = F
+                wr0, wr1, wr2 = wr0 + wt0 * F, wr1 + wt1 * F, wr2 + wt2 * F
+                wt0, wt1, wt2 = wt0 * (1.0 - F), wt1 * (1.0 - F), wt2 * (1.0 - F)
+            if not ok:  # total internal reflection: the transmitted part goes the mirror way
+                wr0, wr1, wr2 = wr0 + wt0, wr1 + wt1, wr2 + wt2
+                transmit = False
+        if row >= 0:
+            _log3(log, row, LOG_WR, (wr0, wr1, wr2))
+            _log3(log, row, LOG_WT, (wt0, wt1, wt2) if transmit else (0.0, 0.0, 0.0))
+        # the reflected ray first: it keeps the incident media, so the entry it overwrites (the ray in hand, already
+        # read) still holds them for the transmitted ray's copy
+        rw0, rw1, rw2 = w0 * wr0, w1 * wr1, w2 * wr2
+        if max(rw0, rw1, rw2) >= CUTOFF:
+            r_dir = reflect(rd, n_s)
+            origin = offset_origin(p, n_geo, r_dir, config.RAY_EPSILON)
+            sp = _push(st_f, st_i, st_mo, st_mi, sp, origin, r_dir, rw0, rw1, rw2, depth + 1, n_media, st_mo, st_mi,
+                       top, np.int64(-1), np.int64(-1), 1.0, RAY_REFLECTED if depth == 0 else branch, np.int64(row))
+        if transmit:
+            tw0, tw1, tw2 = w0 * wt0, w1 * wt1, w2 * wt2
+            if max(tw0, tw1, tw2) >= CUTOFF:
+                origin = offset_origin(p, n_geo, t_dir, config.RAY_EPSILON)
+                sp = _push(st_f, st_i, st_mo, st_mi, sp, origin, t_dir, tw0, tw1, tw2, depth + 1, n_media, st_mo,
+                           st_mi, top, drop, add_obj, add_ior, RAY_TRANSMITTED if depth == 0 else branch,
+                           ~np.int64(row))
+    return (r, g, b), rays, (aov_t, aov_n, aov_kd, aov_obj)
+
+
+@njit
+def shutter_time(cam_time, seed, pixel, sample):
+    """Shutter time of a sample: open + u·(close − open)."""
+    if cam_time[1] <= cam_time[0]:
+        return cam_time[0]
+    return cam_time[0] + (cam_time[1] - cam_time[0]) * rand01(seed, pixel, sample, DIM_TIME)
+
+
+@njit
+def store_aovs(x, y, info, depth, normal, albedo, object_id):
+    t, n, kd, obj = info
+    if t >= 0.0:
+        depth[y, x] = t
+        normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n
+        albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = kd
+        object_id[y, x] = obj
+
+
+@njit_inline
+def point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, fx, fy, seed, key, sample, max_depth,
+           scratch, background):
+    """The radiance through image point (fx, fy); `key` and `sample` index its random numbers (lens, time)."""
+    lx, ly = rand01(seed, key, sample, 2), rand01(seed, key, sample, 3)
+    o, d = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
+    time = shutter_time(cam_time, seed, key, sample)
+    log, log_n = scratch[7], scratch[8]
+    first = log_n[0]
+    rgb, n, info = trace(geo, surf, lit, tex, o, d, time, max_depth, seed, key, sample, scratch, background)
+    if 0 <= first < log.shape[0]:  # where the camera ray went through the image (lumos.explain)
+        log[first, LOG_FX] = fx
+        log[first, LOG_FY] = fy
+    return rgb, n
