@@ -471,7 +471,7 @@ def main():
     if not lumos_ok:
         print("lumos path: not available")
 
-    from lumos.io.images import write_image
+    from lumos.io.image_files import write_image
 
     for name, res in results.items():
         write_image(out / (name.replace(" ", "_") + ".exr"), res["last"])

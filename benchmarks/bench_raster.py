@@ -229,7 +229,7 @@ def main():
     gl_med, gl_best = statistics.median(gl_times), min(gl_times)
     print(f"llvmpipe frames (clear + draw + finish): {', '.join(f'{t:.3f}' for t in gl_times)} s")
 
-    from lumos.io.images import write_image
+    from lumos.io.image_files import write_image
     from lumos.metrics import compare, diff_image
 
     write_image(out / "llvmpipe.png", gl_img)

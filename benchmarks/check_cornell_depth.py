@@ -46,7 +46,7 @@ def main():
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     import lumos
-    from lumos.io.images import write_image
+    from lumos.io.image_files import write_image
 
     scene = lumos.load_scene(SCENE)
     size, fov = scene.render.width, scene.camera.fov

@@ -371,7 +371,7 @@ def _cycles_pixels() -> np.ndarray:
 
     import bpy
 
-    from lumos.io.images import read_image
+    from lumos.io.image_files import read_image
 
     with tempfile.TemporaryDirectory(prefix="cycles-") as tmp:
         path = os.path.join(tmp, "render.exr")
@@ -421,7 +421,7 @@ def reference(spp: int = 16384, max_depth: int = DEPTH, width: int = 256, height
     tests/data/cornell_mitsuba/ (made by benchmarks/make_path_reference.py) are used if they have at least `spp`
     samples; otherwise it is rendered with render_reference (depth 8, 16384 spp: about 4 minutes on two cores
     with llvm_ad_rgb; unbounded twice that) and written to `path`."""
-    from lumos.io.images import read_image, write_image
+    from lumos.io.image_files import read_image, write_image
 
     out = Path(path) if path is not None else reference_path(spp, max_depth, width, height)
     if out.is_file():

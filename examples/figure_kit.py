@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from lumos import film
+from lumos import tonemap
 
 #: Caption lines under each panel, gap between panels, colours (white page, near-black text).
 LINE_H, GAP, FONT_SIZE = 18, 6, 14
@@ -21,7 +21,7 @@ PAGE, INK = (255, 255, 255), (25, 25, 25)
 
 def png8(linear: np.ndarray, exposure: float = 1.0) -> np.ndarray:
     """A linear image as the PNG would hold it: uint8 (H, W, 3), sRGB after `exposure`."""
-    return film.to_png8(np.ascontiguousarray(linear, np.float32), exposure)
+    return tonemap.to_png8(np.ascontiguousarray(linear, np.float32), exposure)
 
 
 def font(size: int = FONT_SIZE):

@@ -147,7 +147,7 @@ def test_subprocess_bad_scene_no_traceback(bad, tmp_path):
 
 @pytest.fixture
 def two_images(tmp_path):
-    from lumos.io.images import write_image
+    from lumos.io.image_files import write_image
 
     a = np.full((4, 5, 3), 0.5, np.float32)
     b = a.copy()

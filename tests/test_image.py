@@ -9,7 +9,7 @@ from PIL import Image as PILImage
 
 from lumos.errors import LumosError
 from lumos.image import Image, id_colors
-from lumos.io.images import read_image
+from lumos.io.image_files import read_image
 
 H, W = 3, 4
 

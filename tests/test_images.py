@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from PIL import Image as PILImage
 
-from lumos import film
+from lumos import tonemap
 from lumos.errors import LumosError
-from lumos.io import images
-from lumos.io.images import SUPPORTED, check_output_path, read_image, write_image
+from lumos.io import image_files as images
+from lumos.io.image_files import SUPPORTED, check_output_path, read_image, write_image
 
 
 @pytest.fixture
@@ -25,17 +25,17 @@ def test_srgb_curve_hand_values():
     # IEC 61966-2-1: 12.92·x below 0.0031308, 1.055·x^(1/2.4) − 0.055 above
     x = np.array([0.0, 0.001, 0.0031308, 0.5, 1.0])
     expected = [0.0, 0.01292, 0.04045, 1.055 * 0.5 ** (1 / 2.4) - 0.055, 1.0]
-    np.testing.assert_allclose(film.srgb_encode(x), expected, atol=2e-6)
-    np.testing.assert_allclose(film.srgb_decode(film.srgb_encode(x)), x, atol=1e-7)
-    assert film.srgb_encode(np.float32([0.5])).dtype == np.float32
+    np.testing.assert_allclose(tonemap.srgb_encode(x), expected, atol=2e-6)
+    np.testing.assert_allclose(tonemap.srgb_decode(tonemap.srgb_encode(x)), x, atol=1e-7)
+    assert tonemap.srgb_encode(np.float32([0.5])).dtype == np.float32
 
 
 def test_to_png8_values_clamp_and_exposure():
     linear = np.array([[0.0, 0.5, 1.0, 2.0, -1.0, np.nan, 0.25]], dtype=np.float32)
-    assert film.to_png8(linear).tolist() == [[0, 188, 255, 255, 0, 0, 137]]
+    assert tonemap.to_png8(linear).tolist() == [[0, 188, 255, 255, 0, 0, 137]]
     # exposure scales before clamping: 0.25·2 = 0.5 → 188; 0.5·2 = 1 → 255
-    assert film.to_png8(linear, exposure=2.0)[0, [1, 6]].tolist() == [255, 188]
-    assert film.to_png8(linear, srgb=False)[0, :4].tolist() == [0, 128, 255, 255]
+    assert tonemap.to_png8(linear, exposure=2.0)[0, [1, 6]].tolist() == [255, 188]
+    assert tonemap.to_png8(linear, srgb=False)[0, :4].tolist() == [0, 128, 255, 255]
 
 
 def test_png_written_with_srgb_values(tmp_path):
@@ -68,7 +68,7 @@ def test_read_png_with_alpha_and_jpeg(tmp_path):
     PILImage.fromarray(rgba, mode="RGBA").save(tmp_path / "a.png")
     back = read_image(tmp_path / "a.png")
     assert back.shape == (2, 2, 3)
-    np.testing.assert_allclose(back[0, 0], [film.srgb_decode(188 / 255), 0, 0], atol=1e-6)
+    np.testing.assert_allclose(back[0, 0], [tonemap.srgb_decode(188 / 255), 0, 0], atol=1e-6)
     PILImage.fromarray(np.full((8, 8, 3), 255, np.uint8)).save(tmp_path / "w.jpg")
     np.testing.assert_allclose(read_image(tmp_path / "w.jpg"), 1.0, atol=0.01)
 

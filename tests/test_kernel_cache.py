@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 import lumos
-from lumos.compiling import ESTIMATE_S, estimate_s, save_timings
+from lumos.jitwatch import ESTIMATE_S, estimate_s, save_timings
 from lumos.kernels import cache
 
 PACKAGE = Path(lumos.__file__).resolve().parent

@@ -18,13 +18,13 @@ SRC = Path(__file__).resolve().parent.parent / "src" / "lumos"
 
 #: lumos's layers, bottom to top: (what the layer is, the top-level modules and packages in it).
 LAYERS = (
-    ("foundation: settings, errors, the sRGB curve", ("config", "errors", "film")),
+    ("foundation: settings, errors, the sRGB curve", ("config", "errors", "tonemap")),
     ("kernels (Numba, arrays only) and mesh operations (NumPy)", ("kernels", "mesh")),
     ("the scene model and the files scenes, models and images come from", ("scene", "io")),
     ("compile: a scene to flat arrays, BVH, polygons, patches", ("compile",)),
     ("the rendering methods and radiosity's solver", ("methods", "radiosity", "denoise")),
     ("the API: render and its Image, ray queries, progress, compile-time messages",
-     ("api", "image", "queries", "compiling", "progress")),
+     ("api", "image", "queries", "jitwatch", "progress")),
     ("tools on top of the API and the command line", ("explaining", "sheet", "metrics", "warmup", "cli",
                                                       "__main__", "__init__")),
 )
@@ -62,7 +62,7 @@ def read_imports(root: Path):
                     continue
                 for alias in node.names:
                     sub = f"{target}.{alias.name}"
-                    if sub in modules:  # `from . import film`: the module itself
+                    if sub in modules:  # `from . import tonemap`: the module itself
                         edges.append((mod, sub, None, node.lineno))
                     else:
                         edges.append((mod, target, alias.name, node.lineno))

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from lumos import api, cli
-from lumos.io.images import read_image
+from lumos.io.image_files import read_image
 
 BOX = """\
 camera: {position: [0, 0, 0.9], look_at: [0, 0, 0], fov: 75}

@@ -11,7 +11,7 @@ from dataclasses import fields
 import numpy as np
 import pytest
 
-from lumos import film
+from lumos import tonemap
 from lumos.errors import LumosError
 from lumos.radiosity import export as export_module
 from lumos.radiosity import store
@@ -336,7 +336,7 @@ def test_ply_export_round_trip(tmp_path, solution, exposure):
     assert radiance.tobytes() == RADIANCE.astype(np.float32).tobytes()  # linear, unclamped, exact as float32
     assert np.array_equal(faces, solution.faces)
     assert rgb8[:2].tolist() == RGB8[exposure]
-    expected = np.rint(255 * film.srgb_encode(np.clip(exposure * RADIANCE, 0, 1))).astype(np.uint8)
+    expected = np.rint(255 * tonemap.srgb_encode(np.clip(exposure * RADIANCE, 0, 1))).astype(np.uint8)
     assert np.array_equal(rgb8, expected)
     assert os.listdir(tmp_path) == ["baked.ply"]
 

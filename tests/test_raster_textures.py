@@ -195,7 +195,7 @@ def test_trilinear_lookup_between_levels_and_point_lookup_for_no_footprint(tmp_p
         assert T.texture_rgb_filtered(tex, row, u, v, (0, 0, 0), 0.5 / 64, 0.0, 0.0, 0.5 / 64) == point
     # a footprint of the whole texture: its mean, whatever the point
     mean = np.asarray(PILImage.open(png), np.float64) / 255.0
-    from lumos.film import srgb_decode
+    from lumos.tonemap import srgb_decode
 
     mean = srgb_decode(mean).mean(axis=(0, 1))
     got = T.texture_rgb_filtered(tex, row, 0.3, 0.6, (0, 0, 0), 2.0, 0.0, 0.0, 2.0)

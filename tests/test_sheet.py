@@ -18,7 +18,7 @@ import yaml
 from PIL import Image as PILImage
 
 import lumos
-from lumos import api, cli, film, sheet
+from lumos import api, cli, sheet, tonemap
 from lumos.errors import LumosError
 from lumos.methods.common import Film
 
@@ -170,7 +170,7 @@ def test_cells_are_the_renders_in_reading_order(fakes, tiny):
     for i, cell in enumerate(cells):
         assert cell["box"] == cell_box(lay, i, 32, 24)
         alone = api.render(tiny, method=cell["method"], shading=cell["shading"])
-        assert np.array_equal(crop(pixels, cell["box"]), film.to_png8(alone.array)), cell["label"]
+        assert np.array_equal(crop(pixels, cell["box"]), tonemap.to_png8(alone.array)), cell["label"]
         assert cell["render_s"] == cell["image"].stats["render_s"] >= 0.0
     xs = sorted({c["box"][0] for c in cells})
     ys = sorted({c["box"][1] for c in cells})
@@ -450,7 +450,7 @@ def test_diff_adds_rows_of_difference_images_on_one_scale(fakes, tiny, reference
             continue
         x, y = lay.diff_slot(i)
         assert cell["diff_box"] == (x + (lay.slot_w - 32) // 2, y, 32, 24)
-        expected = film.quantize8(metrics.diff_image(cell["image"].array, ref["image"].array, scale=scale))
+        expected = tonemap.quantize8(metrics.diff_image(cell["image"].array, ref["image"].array, scale=scale))
         assert np.array_equal(crop(pixels, cell["diff_box"]), expected), cell["label"]
         assert cell["diff_box"][1] > cell["box"][1] and cell["diff_box"][0] == cell["box"][0]  # under its cell
     # the legend's colour bar holds the ramp from black to white

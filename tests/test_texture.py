@@ -12,7 +12,7 @@ from conftest import compile_dict, surfaces
 from PIL import Image
 
 import lumos
-from lumos.film import srgb_decode
+from lumos.tonemap import srgb_decode
 from lumos.kernels import layout as L
 from lumos.kernels import texture as T
 from lumos.kernels.csg import CSG_PART_STRIDE

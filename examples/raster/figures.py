@@ -17,7 +17,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 import lumos
-from lumos import film
+from lumos import tonemap
 from lumos.sheet import make_sheet, save_sheet
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # examples/: the figure scripts' shared kit
@@ -41,7 +41,7 @@ def load(name: str):
 def shot(scene, **settings) -> np.ndarray:
     """The render as the PNG would hold it: uint8 (H, W, 3), sRGB after the scene's exposure."""
     img = lumos.render(scene, **settings)
-    return film.to_png8(img.array, img.exposure)
+    return tonemap.to_png8(img.array, img.exposure)
 
 
 def compose(panels: list[tuple[str, np.ndarray]], columns: int) -> Image.Image:
@@ -128,7 +128,7 @@ def orientation_figure():
             caption = f"triangulate: {str(triangulate).lower()}, {camera}"
             print(f"orientation: {caption:37} centre pixel (linear RGB) "
                   + ", ".join(f"{v:.4f}" for v in linear[c, c]))
-            panels.append((caption, film.to_png8(linear, img.exposure)))
+            panels.append((caption, tonemap.to_png8(linear, img.exposure)))
     quad = abs(centres[False, True][c, c, 0] - centres[False, False][c, c, 0])
     tri = np.abs(centres[True, True] - centres[True, False]).max()
     print(f"orientation: polygon: the centre changes by {quad:.4f} when the camera rolls; "
@@ -191,7 +191,7 @@ def terms_figure():
             if cell["label"] in ("ambient", "diffuse", "specular", "sum: the image"):
                 img = cell["image"]
                 name = "image" if cell["label"].startswith("sum") else cell["label"]
-                panels.append((f"{shading}: {name}", film.to_png8(img.array, img.exposure)))
+                panels.append((f"{shading}: {name}", tonemap.to_png8(img.array, img.exposure)))
     save(compose(panels, 4), "terms.png")
 
 

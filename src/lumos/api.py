@@ -99,7 +99,7 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
     `stats` holds the timings: load_s, build_s (flatten + BVH), render_s and total_s, and jit_s, the time
     Numba spent compiling kernels (a first run only), which build_s and render_s exclude.
     """
-    from .compiling import estimate_s, watch_compiles
+    from .jitwatch import estimate_s, watch_compiles
     from .image import Image
     from .methods import compile_for
     from .progress import make_progress

@@ -327,7 +327,7 @@ def _radiosity_summary(stats: dict) -> str:
 
 def run_render(args: argparse.Namespace, started: float) -> int:
     from . import api
-    from .io.images import check_output_path
+    from .io.image_files import check_output_path
     from .scene.loader import load_scene
 
     out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".png")
@@ -408,7 +408,7 @@ def run_info(args: argparse.Namespace, started: float) -> int:
 
 def run_compare(args: argparse.Namespace, started: float) -> int:
     from . import metrics
-    from .io.images import check_output_path, read_image, write_image
+    from .io.image_files import check_output_path, read_image, write_image
 
     if args.diff:
         check_output_path(args.diff)

@@ -16,9 +16,9 @@ from typing import Iterable
 
 import numpy as np
 
-from . import film
+from . import tonemap
 from .errors import LumosError
-from .io.images import check_output_path, write_image
+from .io.image_files import check_output_path, write_image
 
 #: PNG display of AOVs: these are data maps, stored as round(255 · v) without the sRGB curve (so a normal
 #: map holds the usual 0.5·n + 0.5); any other AOV (albedo) is a colour and gets the curve like the image.
@@ -71,7 +71,7 @@ class Image:
     def save(self, path: str | os.PathLike, aovs: bool | Iterable[str] = True) -> list[Path]:
         """Write the image to `path` and each AOV beside it as `<stem>.<aov><suffix>` (out.png → out.depth.png).
 
-        The format follows the extension (.png, .exr, .pfm, .npy; see `lumos.io.images`). PNG AOVs are the
+        The format follows the extension (.png, .exr, .pfm, .npy; see `lumos.io.image_files`). PNG AOVs are the
         `aov_for_display` views; the linear formats get the raw values (depth keeps its inf).
         aovs: True for all, False for none, or the names to write. Returns the paths written, image first.
         """
@@ -145,7 +145,7 @@ class Image:
         from PIL import Image as PILImage
 
         buffer = io.BytesIO()
-        PILImage.fromarray(film.to_png8(self.array, self.exposure), mode="RGB").save(buffer, format="PNG")
+        PILImage.fromarray(tonemap.to_png8(self.array, self.exposure), mode="RGB").save(buffer, format="PNG")
         return buffer.getvalue()
 
     def _repr_png_(self) -> bytes:

@@ -20,7 +20,7 @@ Layout, in pixels (`layout` computes it; every column is `slot_w` wide, every ro
             diff           diff
             label          label
 
-Each cell is the render's PNG encoding (`film.to_png8`, the path `Image.save` takes), pixel for pixel. Before
+Each cell is the render's PNG encoding (`tonemap.to_png8`, the path `Image.save` takes), pixel for pixel. Before
 the timed renders each (method, shading) pair is rendered once at WARMUP_SIZE, so a cell's time is its render
 alone, not Numba compiling (or loading from its cache) the kernel; that warm-up is the `warm-up` time of the
 info line, shared by all cells.
@@ -43,7 +43,7 @@ from typing import Iterable, Optional
 
 import numpy as np
 
-from . import api, film
+from . import api, tonemap
 from .errors import LumosError
 from .io.atomic import one_line
 
@@ -490,7 +490,7 @@ def compose_sheet(cells: list[dict], columns: Optional[int] = None, title: str =
         x = slot_x + (lay.slot_w - w) // 2
         cell["box"] = (x, slot_y, w, h)
         if img is not None:
-            sheet.paste(PILImage.fromarray(film.to_png8(img.array, img.exposure), mode="RGB"), (x, slot_y))
+            sheet.paste(PILImage.fromarray(tonemap.to_png8(img.array, img.exposure), mode="RGB"), (x, slot_y))
         else:
             draw.rectangle((x, slot_y, x + w - 1, slot_y + h - 1), fill=FAILED)
             _wrapped(draw, "not rendered: " + cell.get("error", ""), fonts["time"], FAILED_INK, x, slot_y, w, h)
@@ -534,7 +534,7 @@ def _draw_diffs(sheet, draw, lay: Layout, cells: list[dict], slots: list[int], r
     draw.text((MARGIN, y), "0", fill=MUTED, font=fonts["info"])
     bar_x = MARGIN + round(draw.textlength("0 ", font=fonts["info"]))
     bar_y = y + (info_h - 3 - LEGEND_BAR_H) // 2
-    bar = film.quantize8(metrics.heat_ramp(np.linspace(0.0, 1.0, LEGEND_BAR_W)[None, :].repeat(LEGEND_BAR_H, 0)))
+    bar = tonemap.quantize8(metrics.heat_ramp(np.linspace(0.0, 1.0, LEGEND_BAR_W)[None, :].repeat(LEGEND_BAR_H, 0)))
     sheet.paste(PILImage.fromarray(bar, mode="RGB"), (bar_x, bar_y))
     draw.rectangle((bar_x - 1, bar_y - 1, bar_x + LEGEND_BAR_W, bar_y + LEGEND_BAR_H), outline=FRAME)
     tail_x = bar_x + LEGEND_BAR_W + round(draw.textlength(" ", font=fonts["info"]))
@@ -547,7 +547,7 @@ def _draw_diffs(sheet, draw, lay: Layout, cells: list[dict], slots: list[int], r
         slot_x, slot_y = lay.diff_slot(i)
         x = slot_x + (lay.slot_w - img.width) // 2
         heat = metrics.diff_image(img.array, ref["image"].array, scale=scale)
-        sheet.paste(PILImage.fromarray(film.quantize8(heat), mode="RGB"), (x, slot_y))
+        sheet.paste(PILImage.fromarray(tonemap.quantize8(heat), mode="RGB"), (x, slot_y))
         draw.rectangle((x - 1, slot_y - 1, x + img.width, slot_y + img.height), outline=FRAME)
         cell["diff_box"] = (x, slot_y, img.width, img.height)
         _centred(draw, cell["label"], fonts["time"], MUTED, slot_x, lay.slot_w, slot_y + lay.cell_h + CAPTION_PAD)

@@ -173,7 +173,7 @@ class FamilyResult:
 
 def warm_family(family: str) -> FamilyResult:
     """Run one family's warm-up in this process; returns what it compiled."""
-    from .compiling import watch_compiles
+    from .jitwatch import watch_compiles
 
     t0 = time.perf_counter()
     try:
@@ -206,7 +206,7 @@ def run(families: Optional[Iterable[str]] = None, jobs: Optional[int] = None,
         on_start: Optional[Callable[[str], None]] = None) -> list[FamilyResult]:
     """Warm `families` (default: all): the FIRST ones, then the rest in `jobs` processes (default: one per core;
     1 = in this process, one after the other). Returns one result per family, in FAMILIES's order."""
-    from .compiling import read_timings, save_timings
+    from .jitwatch import read_timings, save_timings
     from .kernels.cache import cache_dirs
 
     names = families_for(families)

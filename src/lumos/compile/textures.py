@@ -3,7 +3,7 @@
     tex_info, tex_pixels = build_textures(materials)   # also sets each row's MAT_TEXTURE(_COUNT) / MAT_BUMP
 
 Images are read once each with Pillow (two materials naming the same file share its texels). A colour texture
-is decoded from sRGB to linear RGB (`film.srgb_decode`); a bump map is data, not colour: its height is the
+is decoded from sRGB to linear RGB (`tonemap.srgb_decode`); a bump map is data, not colour: its height is the
 Rec. 709 luminance of the file's raw values scaled to [0, 1], not decoded; a normal map keeps its raw RGB; an
 opacity texture keeps the image's alpha channel (its raw luminance when it has none) in all three channels.
 Rows are stored bottom row first; for the scan-line renderer a colour image is followed by its mip-map levels
@@ -189,7 +189,7 @@ def load_texels(path, bump: bool = False, kind: str = "color") -> np.ndarray:
     one, repeated in all three channels. Only `alpha` reads the alpha channel."""
     from PIL import Image as PILImage
 
-    from ..film import srgb_decode
+    from ..tonemap import srgb_decode
 
     kind = "height" if bump else kind
     alpha = None

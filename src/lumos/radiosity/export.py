@@ -10,7 +10,7 @@ the scene. Two kinds of colour go with each vertex:
 
 - the **linear radiance** L, unclamped, as float32 (`radiance_r/g/b` in PLY, `_RADIANCE` in glTF): the data;
 - a **display colour** after `exposure`: PLY `red green blue` uchar = `round(255 · srgb_encode(clamp(exposure · L,
-  0, 1)))` (`lumos.film.to_png8`, the PNG tone map; PLY readers take vertex colours as sRGB bytes); glTF
+  0, 1)))` (`lumos.tonemap.to_png8`, the PNG tone map; PLY readers take vertex colours as sRGB bytes); glTF
   `COLOR_0` float = `clamp(exposure · L, 0, 1)`, since glTF vertex colours are linear and viewers encode them.
 
 PLY: binary little-endian, a `comment` naming what it is; `element vertex` with float `x y z nx ny nz radiance_r
@@ -35,7 +35,7 @@ import struct
 
 import numpy as np
 
-from .. import film
+from .. import tonemap
 from ..errors import LumosError
 from .solution import Solution
 from ..io.atomic import check_output_path, write_atomically
@@ -90,7 +90,7 @@ def _ply_bytes(vertices, normals, radiance, faces, exposure: float) -> bytes:
     for columns, source in ((names[0:3], vertices), (names[3:6], normals), (names[6:9], radiance)):
         for i, name in enumerate(columns):
             vertex[name] = source[:, i]
-    rgb8 = film.to_png8(radiance, exposure)
+    rgb8 = tonemap.to_png8(radiance, exposure)
     for i, name in enumerate(("red", "green", "blue")):
         vertex[name] = rgb8[:, i]
     face = np.empty(len(faces), dtype=[("count", "u1"), ("vertex_indices", "<i4", (3,))])

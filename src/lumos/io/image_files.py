@@ -5,7 +5,7 @@
     rgb = read_image("ref.exr")                 # float32 (H, W, 3) linear
 
 The format follows the extension (case-insensitive). EXR, PFM and NPY hold linear float32, unclamped (inf
-stays inf); PNG holds `round(255 · srgb_encode(clamp(exposure · L)))` (see `lumos.film`). Writes are atomic:
+stays inf); PNG holds `round(255 · srgb_encode(clamp(exposure · L)))` (see `lumos.tonemap`). Writes are atomic:
 the data goes to a temporary file in the target folder, which `os.replace` moves over the target only once
 it is complete, so a failed write never leaves a half-written or clobbered file. Bad paths and unreadable
 files raise `LumosError` with a one-line message naming the path.
@@ -20,7 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-from .. import film
+from .. import tonemap
 from ..errors import LumosError
 from .atomic import check_output_path as _check_path
 from .atomic import one_line, write_atomically
@@ -60,7 +60,7 @@ def write_image(path: str | os.PathLike, array: np.ndarray, exposure: float = 1.
         raise LumosError(f"cannot write image '{path}': expected an (H, W, 3) or (H, W) array, got {data.shape}")
     # Looked up at call time so tests can replace a single encoder.
     writer: Callable[[str, np.ndarray], None] = {
-        ".png": lambda p, a: _write_png(p, film.to_png8(a, exposure, srgb=srgb)),
+        ".png": lambda p, a: _write_png(p, tonemap.to_png8(a, exposure, srgb=srgb)),
         ".exr": _write_exr,
         ".pfm": _write_pfm,
         ".npy": _write_npy,
@@ -155,7 +155,7 @@ def _read_pillow(path: str) -> np.ndarray:
             encoded = np.asarray(img, dtype=np.float64) / 65535.0
         else:
             encoded = np.asarray(img.convert("L" if img.mode in ("1", "L", "LA") else "RGB"), dtype=np.float64) / 255.0
-    return film.srgb_decode(encoded)
+    return tonemap.srgb_decode(encoded)
 
 
 def _read_exr(path: str) -> np.ndarray:
