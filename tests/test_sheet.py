@@ -19,6 +19,7 @@ from PIL import Image as PILImage
 
 import lumos
 from lumos import api, cli, sheet, tonemap
+from lumos import sheet_drawing as drawing
 from lumos.errors import LumosError
 from lumos.methods.common import Film
 
@@ -130,7 +131,7 @@ def test_entries_for_keeps_the_order_named(fakes):
 def test_entries_of_unavailable_methods_are_skipped(fakes, tiny):
     entries = [("ghost", {"method": "ghost"}), ("ramp", {"method": "ramp"})]
     image, cells = sheet.make_sheet(tiny, entries)
-    assert [c["label"] for c in cells] == ["ramp"] and image.size[0] < 2 * sheet.MIN_SLOT_WIDTH
+    assert [c["label"] for c in cells] == ["ramp"] and image.size[0] < 2 * drawing.MIN_SLOT_WIDTH
     with pytest.raises(LumosError, match="no entry uses an available method"):
         sheet.make_sheet(tiny, [("ghost", {"method": "ghost"})])
 
@@ -144,12 +145,12 @@ def test_cli_sheet_size_is_columns_times_cells_plus_captions(capsys, fakes, tiny
     code, err = run(capsys, "sheet", tiny, "-o", out, "-q", *(["--columns", columns] if columns else []))
     assert code == 0, err
     n_columns = min(int(columns or 4), 4)  # 4 cells: raster ×3, ramp
-    slot_w = max(32, sheet.MIN_SLOT_WIDTH)
-    lay = sheet.layout(4, n_columns, 32, 24)
+    slot_w = max(32, drawing.MIN_SLOT_WIDTH)
+    lay = drawing.layout(4, n_columns, 32, 24)
     assert (lay.columns, lay.rows) == (n_columns, rows)
-    assert lay.caption_h >= sheet.LABEL_SIZE + sheet.TIME_SIZE and lay.header_h >= sheet.TITLE_SIZE
-    expected = (sheet.MARGIN + n_columns * (slot_w + sheet.MARGIN),
-                lay.header_h + rows * (24 + lay.caption_h + sheet.MARGIN))
+    assert lay.caption_h >= drawing.LABEL_SIZE + drawing.TIME_SIZE and lay.header_h >= drawing.TITLE_SIZE
+    expected = (drawing.MARGIN + n_columns * (slot_w + drawing.MARGIN),
+                lay.header_h + rows * (24 + lay.caption_h + drawing.MARGIN))
     assert read_png(out).shape[1::-1] == expected
 
 
@@ -157,16 +158,16 @@ def test_wide_cells_set_the_column_width(capsys, fakes, tiny, tmp_path):
     out = tmp_path / "sheet.png"
     code, err = run(capsys, "sheet", tiny, "-o", out, "-q", "--width", 260, "--height", 10, "--columns", 2)
     assert code == 0, err
-    lay = sheet.layout(4, 2, 260, 10)
-    assert read_png(out).shape[1::-1] == (sheet.MARGIN + 2 * (260 + sheet.MARGIN),
-                                          lay.header_h + 2 * (10 + lay.caption_h + sheet.MARGIN))
+    lay = drawing.layout(4, 2, 260, 10)
+    assert read_png(out).shape[1::-1] == (drawing.MARGIN + 2 * (260 + drawing.MARGIN),
+                                          lay.header_h + 2 * (10 + lay.caption_h + drawing.MARGIN))
 
 
 def test_cells_are_the_renders_in_reading_order(fakes, tiny):
     image, cells = sheet.make_sheet(tiny, columns=3)
     pixels = np.asarray(image)
     assert [c["label"] for c in cells] == ["raster · flat", "raster · Gouraud", "raster · Phong", "ramp"]
-    lay = sheet.layout(4, 3, 32, 24)
+    lay = drawing.layout(4, 3, 32, 24)
     for i, cell in enumerate(cells):
         assert cell["box"] == cell_box(lay, i, 32, 24)
         alone = api.render(tiny, method=cell["method"], shading=cell["shading"])
@@ -175,8 +176,8 @@ def test_cells_are_the_renders_in_reading_order(fakes, tiny):
     xs = sorted({c["box"][0] for c in cells})
     ys = sorted({c["box"][1] for c in cells})
     assert len(xs) == 3 and len(ys) == 2
-    assert np.diff(xs).tolist() == [lay.slot_w + sheet.MARGIN] * 2
-    assert ys[1] - ys[0] == 24 + lay.caption_h + sheet.MARGIN
+    assert np.diff(xs).tolist() == [lay.slot_w + drawing.MARGIN] * 2
+    assert ys[1] - ys[0] == 24 + lay.caption_h + drawing.MARGIN
 
 
 def test_captions_and_title_carry_text(capsys, fakes, tiny, tmp_path):
@@ -184,7 +185,7 @@ def test_captions_and_title_carry_text(capsys, fakes, tiny, tmp_path):
     code, err = run(capsys, "sheet", tiny, "-o", out, "-q", "--columns", 3)
     assert code == 0, err
     pixels = read_png(out)
-    lay = sheet.layout(4, 3, 32, 24)
+    lay = drawing.layout(4, 3, 32, 24)
 
     def strip(i):  # the caption strip under slot i, below the frame line
         x, y = lay.slot(i)
@@ -195,7 +196,7 @@ def test_captions_and_title_carry_text(capsys, fakes, tiny, tmp_path):
     assert not np.array_equal(strip(0), strip(1))  # 'raster · flat' vs 'raster · Gouraud'
     assert dark_pixels(strip(4)) == 0  # an empty slot: the text above came from the captions
     assert dark_pixels(pixels[: lay.header_h]) > 50  # title and info line
-    assert (pixels[0] == sheet.BACKGROUND).all()
+    assert (pixels[0] == drawing.BACKGROUND).all()
 
 
 def test_default_cell_size_is_capped_unless_a_width_is_given(fakes, tmp_path):
@@ -221,7 +222,7 @@ def test_methods_flag_picks_cells(capsys, fakes, tiny, tmp_path):
     code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.png", "-q", "--methods", "ramp")
     assert code == 0, err
     assert {s.method for s in fakes} == {"ramp"}
-    assert read_png(tmp_path / "s.png").shape[1] == sheet.MARGIN * 2 + sheet.MIN_SLOT_WIDTH
+    assert read_png(tmp_path / "s.png").shape[1] == drawing.MARGIN * 2 + drawing.MIN_SLOT_WIDTH
 
 
 def test_progress_line_per_cell_unless_quiet(capsys, fakes, tiny, tmp_path):
@@ -239,8 +240,8 @@ def test_jpeg_output(capsys, fakes, tiny, tmp_path):
     code, err = run(capsys, "sheet", tiny, "-o", tmp_path / "s.JPG", "-q")
     assert code == 0, err
     with PILImage.open(tmp_path / "s.JPG") as img:
-        assert img.format == "JPEG" and img.size == (sheet.layout(4, None, 32, 24).width,
-                                                     sheet.layout(4, None, 32, 24).height)
+        assert img.format == "JPEG" and img.size == (drawing.layout(4, None, 32, 24).width,
+                                                     drawing.layout(4, None, 32, 24).height)
 
 
 def test_default_output_in_cwd(capsys, monkeypatch, fakes, tiny, tmp_path):
@@ -303,7 +304,7 @@ def test_raycast_cell_is_the_single_render_png(capsys, tiny, tmp_path):
     code, err = run(capsys, "sheet", tiny, "-o", out, "-q", "--methods", "raycast")
     assert code == 0, err
     pixels = read_png(out)
-    lay = sheet.layout(1, None, 32, 24)
+    lay = drawing.layout(1, None, 32, 24)
     assert pixels.shape[1::-1] == (lay.width, lay.height)
     with PILImage.open(io.BytesIO(lumos.render(tiny, method="raycast").to_png_bytes())) as alone:
         expected = np.asarray(alone.convert("RGB"))
@@ -341,7 +342,7 @@ def test_a_method_that_cannot_draw_the_scene_gets_a_cell_that_says_why(capsys, b
     x, y, w, h = cells[1]["box"]
     assert (w, h) == (32, 24)
     box = pixels[y : y + h, x : x + w].reshape(-1, 3)
-    assert (box == sheet.FAILED).all(axis=1).mean() > 0.5
+    assert (box == drawing.FAILED).all(axis=1).mean() > 0.5
     assert (box[:, 0].astype(int) - box[:, 2].astype(int) > 60).any()
 
 
@@ -418,8 +419,8 @@ def test_captions_get_a_figures_line(capsys, fakes, tiny, tmp_path):
     plain, with_ref = tmp_path / "plain.png", tmp_path / "ref.png"
     assert run(capsys, "sheet", tiny, "-o", plain, "-q")[0] == 0
     assert run(capsys, "sheet", tiny, "-o", with_ref, "-q", "--reference", "raster:flat")[0] == 0
-    lay, lay_ref = sheet.layout(4, None, 32, 24), sheet.layout(4, None, 32, 24, figures=True)
-    assert lay_ref.caption_h - lay.caption_h == sheet._line_height(sheet._fonts()["time"])
+    lay, lay_ref = drawing.layout(4, None, 32, 24), drawing.layout(4, None, 32, 24, figures=True)
+    assert lay_ref.caption_h - lay.caption_h == drawing._line_height(drawing._fonts()["time"])
     pixels = read_png(with_ref)
     assert pixels.shape[:2] == (lay_ref.height, lay_ref.width) and read_png(plain).shape[0] == lay.height
     for i in range(4):  # the third caption line: "reference" or the figures, both text
@@ -435,15 +436,15 @@ def test_diff_adds_rows_of_difference_images_on_one_scale(fakes, tiny, reference
 
     plain, plain_cells = sheet.make_sheet(tiny, columns=columns, reference=reference, warm_up=False)
     image, cells = sheet.make_sheet(tiny, columns=columns, reference=reference, diff=True, warm_up=False)
-    lay = sheet.layout(4, columns, 32, 24, figures=True, diff_rows=diff_rows)
-    assert image.size == (lay.width, lay.height) and plain.size[1] == sheet.layout(4, columns, 32, 24,
+    lay = drawing.layout(4, columns, 32, 24, figures=True, diff_rows=diff_rows)
+    assert image.size == (lay.width, lay.height) and plain.size[1] == drawing.layout(4, columns, 32, 24,
                                                                                      figures=True).height
     # the sheet grows by the legend and the rows (none for a row that would only hold the reference)
-    assert image.size[1] - plain.size[1] == lay.legend_h + len(diff_rows) * (24 + lay.diff_caption_h + sheet.MARGIN)
+    assert image.size[1] - plain.size[1] == lay.legend_h + len(diff_rows) * (24 + lay.diff_caption_h + drawing.MARGIN)
     pixels = np.asarray(image)
     assert [c["box"] for c in cells] == [c["box"] for c in plain_cells]  # the grid above is where it was
     ref = next(c for c in cells if c["reference"])
-    scale = sheet.DIFF_SCALE / ref["image"].exposure
+    scale = drawing.DIFF_SCALE / ref["image"].exposure
     for i, cell in enumerate(cells):
         if cell["reference"]:
             assert cell["diff_box"] is None
@@ -493,7 +494,7 @@ def test_help_gives_reference_and_diff(capsys):
     assert cli.main(["sheet", "--help"]) == 0
     out = " ".join(capsys.readouterr().out.split())
     assert "--reference METHOD" in out and "raster:SHADING" in out and "--diff" in out
-    assert f"at {sheet.DIFF_SCALE} of the display's white" in out
+    assert f"at {drawing.DIFF_SCALE} of the display's white" in out
     for name in api.METHODS:
         assert name in out
 

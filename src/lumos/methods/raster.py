@@ -151,7 +151,8 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
     specular, Kd), 12 values. Gouraud: at each vertex, the light that reaches it with unit coefficients (Kd = Ks = 1;
     the texture, or the material's own Kd and Ks, multiplies it per pixel), out[i] = (diffuse, specular) light on
     the side the normal points to, then on the other side, 12 values: which side the viewer sees is known per
-    pixel, from the polygon's face normal. Chunks c0 … c1−1 of _CHUNK points; rays[c]: the shadow rays of chunk c."""
+    pixel, from the polygon's face normal. Chunks c0 … c1−1 of _CHUNK points; rays[c]: the shadow rays of
+    chunk c."""
     _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out, rays,
                   c0, c1, np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
 
