@@ -13,7 +13,8 @@ import pytest
 
 import lumos
 from lumos.errors import LumosError
-from lumos.io.gltf import import_gltf, quaternion_matrix, triangles
+from lumos.io.gltf import import_gltf, triangles
+from lumos.io.gltf_document import quaternion_matrix
 from lumos.io.gltf_materials import shininess
 from lumos.io.models import import_model
 

@@ -1,6 +1,6 @@
 """glTF materials (pbrMetallicRoughness and the KHR material extensions) → lumos's classic material dicts.
 
-    materials = Materials(doc)        # doc: a gltf.Document
+    materials = Materials(doc)        # doc: a gltf_document.Document
     name = materials.key(0)           # the lumos material name of glTF material 0 (converted once)
     materials.used                    # {name: material dict} of the materials the meshes use
 
