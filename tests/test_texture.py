@@ -16,7 +16,8 @@ from lumos.tonemap import srgb_decode
 from lumos.kernels import layout as L
 from lumos.kernels import texture as T
 from lumos.kernels.csg import CSG_PART_STRIDE
-from lumos.kernels.texture import bump_normal, material_coeffs, noise01, surface_tangents, texture_rgb
+from lumos.kernels.tangents import surface_tangents
+from lumos.kernels.texture import bump_normal, material_coeffs, noise01, texture_rgb
 from lumos.kernels.views import surfaces_of
 
 ORIGIN = (0.0, 0.0, 0.0)
