@@ -15,7 +15,7 @@ from lumos import tonemap
 from lumos.errors import LumosError
 from lumos.radiosity import export as export_module
 from lumos.radiosity import store
-from lumos.radiosity.export import glb_container
+from lumos.io.gltf_document import glb_container
 from lumos.radiosity.solution import Solution
 
 #: Display radiance of the 8 vertices: rows 0–1 hold the hand-checked values 0, 0.25, 0.5, 1, 2.

@@ -28,6 +28,8 @@ ACCESSOR_TYPES = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3
 SUPPORTED_EXTENSIONS = ("KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission",
                         "KHR_materials_ior", "KHR_texture_transform")
 
+#: The GLB container (glTF 2.0 §4.4): its magic (b"glTF") and chunk types (b"JSON", b"BIN\0"), read by `_glb_chunks`
+#: and written by `glb_container`.
 _GLB_MAGIC, _CHUNK_JSON, _CHUNK_BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
 
 #: elements of an accessor without a bufferView (all zeros, maybe sparse): more is taken as a corrupt count
@@ -365,3 +367,14 @@ def key_path(at: str, key: str) -> str:
 def show_value(v) -> str:
     text = json.dumps(v) if not isinstance(v, float) or math.isfinite(v) else repr(v)
     return text if len(text) <= 40 else text[:37] + "..."
+
+
+def glb_container(json_bytes: bytes, binary: bytes) -> bytes:
+    """The GLB layout (glTF 2.0 §4.4): a 12-byte header, then the JSON chunk padded with spaces and the BIN chunk
+    padded with zeros, each to a multiple of 4 bytes."""
+    json_chunk = json_bytes + b" " * (-len(json_bytes) % 4)
+    bin_chunk = binary + b"\0" * (-len(binary) % 4)
+    total = 12 + 8 + len(json_chunk) + 8 + len(bin_chunk)
+    return b"".join([struct.pack("<III", _GLB_MAGIC, 2, total),
+                     struct.pack("<II", len(json_chunk), _CHUNK_JSON), json_chunk,
+                     struct.pack("<II", len(bin_chunk), _CHUNK_BIN), bin_chunk])

@@ -16,9 +16,10 @@ the scene. Two kinds of colour go with each vertex:
 PLY: binary little-endian, a `comment` naming what it is; `element vertex` with float `x y z nx ny nz radiance_r
 radiance_g radiance_b` and uchar `red green blue`; `element face` with `list uchar int vertex_indices`.
 
-GLB (glTF 2.0 binary, written here): one scene, node, mesh and indexed-triangle primitive with attributes
-`POSITION` (with min / max), `NORMAL`, `COLOR_0` (float VEC3) and `_RADIANCE` (float VEC3, an application-specific
-attribute), uint32 indices, and an unlit material (`KHR_materials_unlit`, white base colour) so that viewers
+GLB (glTF 2.0 binary; the container is `io.gltf_document.glb_container`, beside the reader that `io.gltf` uses):
+one scene, node, mesh and indexed-triangle primitive with attributes `POSITION` (with min / max), `NORMAL`,
+`COLOR_0` (float VEC3) and `_RADIANCE` (float VEC3, an application-specific attribute), uint32 indices, and an
+unlit material (`KHR_materials_unlit`, white base colour) so that viewers
 show the baked colours without lighting them again; `asset.generator` is "lumos", and `asset.extras` records
 the exposure and what each attribute holds.
 
@@ -31,7 +32,6 @@ import json
 import math
 import numbers
 import os
-import struct
 
 import numpy as np
 
@@ -39,15 +39,13 @@ from .. import tonemap
 from ..errors import LumosError
 from .solution import Solution
 from ..io.atomic import check_output_path, write_atomically
+from ..io.gltf_document import glb_container
 from .store import DISPLAY_FIELDS, check_arrays
 
 #: Extensions `export_solution` writes.
 FORMATS = (".ply", ".glb")
 PLY_COMMENT = "lumos radiosity solution: display mesh; units: linear radiance (radiance_r/g/b, unclamped)"
 
-_GLB_MAGIC = 0x46546C67  # b"glTF"
-_CHUNK_JSON = 0x4E4F534A  # b"JSON"
-_CHUNK_BIN = 0x004E4942  # b"BIN\0"
 _FLOAT, _UINT32 = 5126, 5125  # glTF accessor componentType
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963  # bufferView target
 _TRIANGLES = 4
@@ -157,13 +155,3 @@ def _glb_bytes(vertices, normals, radiance, faces, exposure: float) -> bytes:
     }
     return glb_container(json.dumps(gltf, separators=(",", ":")).encode("utf-8"), b"".join(blobs))
 
-
-def glb_container(json_bytes: bytes, binary: bytes) -> bytes:
-    """The GLB layout (glTF 2.0 §4.4): a 12-byte header, then the JSON chunk padded with spaces and the BIN chunk
-    padded with zeros, each to a multiple of 4 bytes."""
-    json_chunk = json_bytes + b" " * (-len(json_bytes) % 4)
-    bin_chunk = binary + b"\0" * (-len(binary) % 4)
-    total = 12 + 8 + len(json_chunk) + 8 + len(bin_chunk)
-    return b"".join([struct.pack("<III", _GLB_MAGIC, 2, total),
-                     struct.pack("<II", len(json_chunk), _CHUNK_JSON), json_chunk,
-                     struct.pack("<II", len(bin_chunk), _CHUNK_BIN), bin_chunk])
