@@ -8,7 +8,9 @@ import numba
 import numpy as np
 
 from ..errors import LumosError
+from ..kernels.threads import parallel_for
 from ..scene.model import TERM_AOVS
+from .capabilities import check_settings
 
 #: Channels of a method's term buffer (H, W, TERM_CHANNELS): each of TERM_AOVS as (r, g, b), in that order.
 TERM_CHANNELS = 3 * len(TERM_AOVS)
@@ -84,3 +86,64 @@ def check_memory(width: int, height: int, bytes_per_pixel: int = 64) -> None:
             f"render: {width}x{height} needs about {need / 2**30:.1f} GiB of buffers, "
             f"more than the {avail / 2**30:.1f} GiB of memory available"
         )
+
+
+# -------------------------------------------------------------------------------------- one render's set-up
+
+#: The AOVs a method's kernels write per pixel into the depth, normal, albedo and object id buffers.
+SURFACE_AOVS = ("depth", "normal", "albedo", "object_id")
+
+
+@dataclass
+class Buffers:
+    """What the classic methods' kernels write: radiance float32 (H, W, 3); the surface AOV buffers (or None
+    where `start` was told to leave them out); the term buffer (H, W, TERM_CHANNELS), or a (1, 1, …) stand-in
+    when no term is asked for; the rays traced per row."""
+
+    radiance: np.ndarray
+    depth: np.ndarray | None
+    normal: np.ndarray | None
+    albedo: np.ndarray | None
+    object_id: np.ndarray | None
+    terms: np.ndarray
+    want_terms: bool
+    rays_per_row: np.ndarray
+
+
+def start(settings, bytes_per_pixel: int = 64, surface_aovs: str = "always") -> tuple[int, Buffers]:
+    """Every render's first steps: refuse what the method cannot do (`capabilities.check_settings`) and images
+    that would not fit in memory, take the threads asked for, and allocate the buffers. `surface_aovs`:
+    "always" allocates the surface AOV buffers, "asked" only when one of them is asked for (None otherwise: a
+    kernel that takes None compiles without the stores), "none" leaves them to the caller. Returns (threads,
+    buffers)."""
+    width, height = settings.width, settings.height
+    check_settings(settings)
+    check_memory(width, height, bytes_per_pixel=bytes_per_pixel)
+    threads = set_threads(settings.threads)
+    want = surface_aovs == "always" or (surface_aovs == "asked" and any(a in SURFACE_AOVS for a in settings.aov))
+    depth, normal, albedo, object_id = allocate_aovs(height, width) if want else (None, None, None, None)
+    want_terms = any(name in TERM_AOVS for name in settings.aov)
+    terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
+    return threads, Buffers(np.zeros((height, width, 3), np.float32), depth, normal, albedo, object_id, terms,
+                            want_terms, np.zeros(height, np.int64))
+
+
+def run_bands(rows, height: int, progress=None, bands=None) -> None:
+    """rows(y0, y1) over the image in bands of rows (`row_bands`, or the (y0, y1) list given), each band's rows
+    on the threads (`threads.parallel_for`), calling progress(fraction done) after each band."""
+    for y0, y1 in row_bands(height) if bands is None else bands:
+        parallel_for(rows, y0, y1)
+        if progress is not None:
+            progress(y1 / height)
+
+
+def finish(settings, buffers: Buffers, threads: int, samples, rays: int, primary_rays: int = 0) -> Film:
+    """The `Film` of a render: its radiance, the AOVs asked for (the surface buffers, `samples` (H, W) int32 —
+    camera rays per pixel — and the terms), the rays traced."""
+    b = buffers
+    all_aovs = {"depth": b.depth, "normal": b.normal, "albedo": b.albedo, "object_id": b.object_id,
+                "samples": samples}
+    if b.want_terms:
+        all_aovs.update(term_aovs(b.terms))
+    return Film(b.radiance, {name: all_aovs[name] for name in settings.aov}, rays, threads,
+                primary_rays=primary_rays)

@@ -36,8 +36,7 @@ from ..kernels.surface import shading_side
 from ..kernels.texture import TEX_SIZE, bump_normal, material_coeffs_filtered
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
-from .capabilities import check_settings
-from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, set_threads, term_aovs
+from .common import Film, allocate_aovs, check_memory, finish, set_threads, start
 
 FLAT, GOURAUD, PHONG = 0, 1, 2
 _SHADING = {"flat": FLAT, "gouraud": GOURAUD, "phong": PHONG}
@@ -459,28 +458,15 @@ class RasterFrame:
 def render_raster(compiled, camera, settings, progress=None) -> Film:
     """Scan-line render `compiled` (a `CompiledScene` compiled for method raster) with `settings`."""
     width, height = settings.width, settings.height
-    check_settings(settings)
-    check_memory(width, height, bytes_per_pixel=96)
-    threads = set_threads(settings.threads)
+    threads, b = start(settings, bytes_per_pixel=96, surface_aovs="asked")
     frame = RasterFrame(compiled, camera, settings)
-    radiance = np.zeros((height, width, 3), np.float32)
-    want_aovs = bool(settings.aov)
-    want_terms = any(name in TERM_AOVS for name in settings.aov)
-    buffers = allocate_aovs(height, width) if want_aovs else None
-    terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
-    rays_per_row = np.zeros(height, np.int64)
+    surface = (b.depth, b.normal, b.albedo, b.object_id) if b.depth is not None else None
     n = len(frame.offsets)
     for s in range(n):
-        frame.shade_pass(s, 1.0 / n, radiance, buffers if s == 0 else None, terms, want_terms, rays_per_row)
+        frame.shade_pass(s, 1.0 / n, b.radiance, surface if s == 0 else None, b.terms, b.want_terms, b.rays_per_row)
         if progress is not None:
             progress((s + 1) / n)
-    depth, normal, albedo, object_id = buffers if want_aovs else allocate_aovs(1, 1)
-    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
-                "samples": np.full((height, width), n, np.int32)}
-    if want_terms:
-        all_aovs.update(term_aovs(terms))
-    aovs = {name: all_aovs[name] for name in settings.aov}
-    return Film(radiance, aovs, frame.rays + int(rays_per_row.sum()), threads)
+    return finish(settings, b, threads, np.full((height, width), n, np.int32), frame.rays + int(b.rays_per_row.sum()))
 
 
 def _vertex_frames(mesh, frames):

@@ -20,11 +20,9 @@ from ..kernels.jit import njit, njit_serial
 from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
 from ..kernels.texture import bump_frame, bump_normal, material_coeffs
-from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
-from .capabilities import check_settings
-from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
+from .common import Film, finish, run_bands, start
 
 
 @njit
@@ -126,31 +124,17 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
     only row y is rendered, and pixel (x, y)'s per-light shares go to light_log (`lumos.explain`).
     """
     width, height = settings.width, settings.height
-    check_settings(settings)
-    check_memory(width, height)
-    threads = set_threads(settings.threads)
+    # the surface AOV buffers only when one of them is asked for (writing them costs about a fifth of a render of
+    # a large mesh: BENCHMARKS.md)
+    threads, b = start(settings, surface_aovs="asked")
     spp = 1 if settings.antialias == "none" else settings.spp
     cam_vecs, cam_params = camera_arrays(camera)
-    radiance = np.zeros((height, width, 3), np.float32)
-    # the depth, normal, albedo and object id buffers only when one of them is asked for (writing them costs about
-    # a fifth of a render of a large mesh: BENCHMARKS.md)
-    want_aovs = any(name in ("depth", "normal", "albedo", "object_id") for name in settings.aov)
-    depth, normal, albedo, object_id = allocate_aovs(height, width) if want_aovs else (None, None, None, None)
-    want_terms = any(name in TERM_AOVS for name in settings.aov)
-    terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
-    rays_per_row = np.zeros(height, np.int64)
-    pixel, light_log, bands = _NO_PIXEL, np.zeros((0, PER_LIGHT_SIZE)), row_bands(height)
+    pixel, light_log, bands = _NO_PIXEL, np.zeros((0, PER_LIGHT_SIZE)), None
     if explain is not None:
         pixel, light_log, bands = np.array(explain[:2], np.int64), explain[2], [(explain[1], explain[1] + 1)]
-    for y0, y1 in bands:
-        parallel_for(lambda r0, r1: _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, r0, r1, spp,
-                                                  settings.seed, radiance, depth, normal, albedo, object_id, terms,
-                                                  want_terms, rays_per_row, pixel, light_log), y0, y1)
-        if progress is not None:
-            progress(y1 / height)
-    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id,
-                "samples": np.full((height, width), spp, np.int32)}
-    if want_terms:
-        all_aovs.update(term_aovs(terms))
-    aovs = {name: all_aovs[name] for name in settings.aov}
-    return Film(radiance, aovs, int(rays_per_row.sum()), threads, primary_rays=width * height * spp)
+    run_bands(lambda r0, r1: _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, r0, r1, spp,
+                                           settings.seed, b.radiance, b.depth, b.normal, b.albedo, b.object_id,
+                                           b.terms, b.want_terms, b.rays_per_row, pixel, light_log),
+              height, progress, bands)
+    return finish(settings, b, threads, np.full((height, width), spp, np.int32), int(b.rays_per_row.sum()),
+                  primary_rays=width * height * spp)

@@ -30,12 +30,10 @@ import numpy as np
 from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_ray
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
-from ..kernels.threads import parallel_for
 from ..errors import LumosError
 from ..kernels.views import geometry_of, lighting_of, owned_views, surfaces_of, textures_of
 from .adaptive import adaptive_pixel, adaptive_rows, aov_rows, corner_rows
-from .capabilities import check_settings
-from .common import TERM_AOVS, TERM_CHANNELS, Film, allocate_aovs, check_memory, row_bands, set_threads, term_aovs
+from .common import SURFACE_AOVS, TERM_CHANNELS, Film, finish, run_bands, start
 from .whitted_trace import LOG_DEPTH, LOG_FX, LOG_FY, point_radiance, shutter_time, store_aovs, trace, trace_scratch
 
 AA_NONE, AA_SUPERSAMPLE, AA_ADAPTIVE = 0, 1, 2
@@ -159,9 +157,7 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
 def render_whitted(compiled, camera, settings, progress=None) -> Film:
     """Whitted-trace `compiled` (a `CompiledScene`) through `camera` with `settings` (a `RenderSettings`)."""
     width, height = settings.width, settings.height
-    check_settings(settings)
-    check_memory(width, height, bytes_per_pixel=80)
-    threads = set_threads(settings.threads)
+    threads, b = start(settings, bytes_per_pixel=80)
     cam_vecs, cam_params = camera_arrays(camera)
     cam_time = np.array(camera.shutter, dtype=np.float64)
     sa = compiled.arrays
@@ -170,50 +166,29 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
         raise LumosError("render.max_depth: whitted needs a finite number of bounces (-1, unbounded, is for path)")
     max_depth = np.int64(settings.resolved_max_depth())
     mode = ANTIALIAS_MODES[settings.antialias]
-    want_terms = any(name in TERM_AOVS for name in settings.aov)
-    terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)
-    radiance = np.zeros((height, width, 3), np.float32)
-    depth, normal, albedo, object_id = allocate_aovs(height, width)
+    w, h = np.int64(width), np.int64(height)
     samples = np.zeros((height, width), np.int32)
-    rays_per_row = np.zeros(height, np.int64)
-    bands = row_bands(height)
+    rays = 0
     if mode == AA_ADAPTIVE:
-        corners = np.zeros((height + 1, width + 1, 3 + TERM_CHANNELS if want_terms else 3))
+        corners = np.zeros((height + 1, width + 1, 3 + TERM_CHANNELS if b.want_terms else 3))
         corner_rays = np.zeros(height + 1, np.int64)
-        total = len(bands) * 2
-        done = 0
-        for y0, y1 in row_bands(height + 1):
-            parallel_for(lambda r0, r1: corner_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width),
-                                                     np.int64(height), np.int64(r0), np.int64(r1), seed, max_depth,
-                                                     corners, corner_rays), y0, y1)
-            done += 1
-            if progress is not None:
-                progress(min(done / total, 0.5))
-        for y0, y1 in bands:
-            parallel_for(lambda r0, r1: adaptive_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width),
-                                                       np.int64(height), np.int64(r0), np.int64(r1), seed, max_depth,
-                                                       float(settings.adaptive_threshold),
-                                                       np.int64(settings.adaptive_depth), corners, radiance, samples,
-                                                       terms, rays_per_row), y0, y1)
-            if progress is not None:
-                progress(0.5 + 0.5 * y1 / height)
-        if set(settings.aov) & {"depth", "normal", "albedo", "object_id"}:
-            for y0, y1 in bands:
-                parallel_for(lambda r0, r1: aov_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width),
-                                                      np.int64(height), np.int64(r0), np.int64(r1), seed, max_depth,
-                                                      depth, normal, albedo, object_id, rays_per_row), y0, y1)
+        half = None if progress is None else (lambda f: progress(0.5 * f))
+        run_bands(lambda r0, r1: corner_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
+                                             seed, max_depth, corners, corner_rays), height + 1, half)
+        rest = None if progress is None else (lambda f: progress(0.5 + 0.5 * f))
+        run_bands(lambda r0, r1: adaptive_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
+                                               seed, max_depth, float(settings.adaptive_threshold),
+                                               np.int64(settings.adaptive_depth), corners, b.radiance, samples,
+                                               b.terms, b.rays_per_row), height, rest)
+        if set(settings.aov) & set(SURFACE_AOVS):
+            run_bands(lambda r0, r1: aov_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
+                                              seed, max_depth, b.depth, b.normal, b.albedo, b.object_id,
+                                              b.rays_per_row), height)
+        rays = int(corner_rays.sum())
     else:
         spp = np.int64(1 if mode == AA_NONE else settings.spp)
-        for y0, y1 in bands:
-            parallel_for(lambda r0, r1: _sample_rows(sa, cam_vecs, cam_params, cam_time, np.int64(width),
-                                                     np.int64(height), np.int64(r0), np.int64(r1), spp, seed,
-                                                     max_depth, radiance, depth, normal, albedo, object_id, samples,
-                                                     terms, want_terms, rays_per_row), y0, y1)
-            if progress is not None:
-                progress(y1 / height)
-    all_aovs = {"depth": depth, "normal": normal, "albedo": albedo, "object_id": object_id, "samples": samples}
-    if want_terms:
-        all_aovs.update(term_aovs(terms))
-    aovs = {name: all_aovs[name] for name in settings.aov}
-    rays = int(rays_per_row.sum()) + (int(corner_rays.sum()) if mode == AA_ADAPTIVE else 0)
-    return Film(radiance, aovs, rays, threads, primary_rays=int(samples.sum()))
+        run_bands(lambda r0, r1: _sample_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
+                                              spp, seed, max_depth, b.radiance, b.depth, b.normal, b.albedo,
+                                              b.object_id, samples, b.terms, b.want_terms, b.rays_per_row),
+                  height, progress)
+    return finish(settings, b, threads, samples, rays + int(b.rays_per_row.sum()), primary_rays=int(samples.sum()))
