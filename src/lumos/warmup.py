@@ -110,6 +110,7 @@ def _warm_bvh() -> None:
 
 def _warm_raycast() -> None:
     _render(_scene(), "raycast")
+    _render(_scene(), "raycast", aov=["depth"])  # the kernel compiled with the surface AOV stores (methods.raycast)
 
 
 def _warm_raster() -> None:
