@@ -271,7 +271,9 @@ def test_a_normal_map_needs_a_file():
 
 
 def test_textured_mesh_with_maps_raster_phong_equals_raycast():
-    from test_raster_textures import CAMERA, LIGHTS, agree, sphere_mesh
+    from helpers import TEXTURE_CAMERA as CAMERA
+    from helpers import TEXTURE_LIGHTS as LIGHTS
+    from helpers import agree, sphere_mesh
 
     v, f, n, uv = sphere_mesh()
     material = {"ka": 0.3, "kd": 0.7, "ks": 0.3, "shininess": 20, "emission": 0.2,

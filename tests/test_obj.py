@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from helpers import check_pieces
+
 import lumos
 from lumos.errors import LumosError
 from lumos.io.models import import_model
@@ -37,21 +39,6 @@ def all_triangles(model) -> int:
 def bounds(model) -> np.ndarray:
     vertices = np.concatenate([o["vertices"] for o in model.objects])
     return np.array([vertices.min(axis=0), vertices.max(axis=0)])
-
-
-def check_pieces(model) -> None:
-    for obj in model.objects:
-        n = len(obj["vertices"])
-        assert obj["vertices"].dtype == np.float64 and obj["vertices"].shape == (n, 3)
-        assert obj["faces"].dtype == np.int64 and obj["faces"].shape[1] == 3
-        assert obj["faces"].min() >= 0 and obj["faces"].max() < n
-        assert np.isfinite(obj["vertices"]).all()
-        assert obj["material"] is None or obj["material"] in model.materials
-        if "normals" in obj:
-            assert obj["normals"].shape == (n, 3)
-            np.testing.assert_allclose(np.linalg.norm(obj["normals"], axis=1), 1.0, atol=1e-9)
-        if "uvs" in obj:
-            assert obj["uvs"].shape == (n, 2) and np.isfinite(obj["uvs"]).all()
 
 
 # ------------------------------------------------------------------------------------------------ real files

@@ -12,7 +12,7 @@ from hypothesis import strategies as st  # noqa: E402
 
 from lumos.errors import LumosError  # noqa: E402
 from lumos.io.obj import import_obj  # noqa: E402
-from test_obj import check_pieces  # noqa: E402
+from helpers import check_pieces  # noqa: E402
 
 NUM = st.one_of(st.integers(-12, 12).map(str), st.floats(-3, 3, allow_nan=False).map(lambda x: f"{x:.3g}"),
                 st.sampled_from(["nan", "inf", "-inf", "1e309", "1e300", "-0", "x", "", "1.#IND", "0x1", "1e-320"]))

@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from PIL import Image as PILImage
 
+from helpers import TEXTURE_CAMERA, TEXTURE_LIGHTS, agree, interior_of, sphere_mesh
+
 import lumos
 from lumos.api import resolve_settings
 from lumos.methods import compile_for
@@ -21,37 +23,7 @@ from lumos.compile.textures import mip_levels
 from lumos.kernels import texture as T
 from lumos.kernels.views import textures_of
 
-LIGHTS = [
-    {"type": "point", "position": [3.0, 4.0, 5.0], "intensity": [1.0, 0.95, 0.9]},
-    {"type": "directional", "direction": [0.4, -1.0, -0.6], "intensity": 0.3},
-]
-CAMERA = {"position": [0.3, 0.4, 3.2], "look_at": [0.0, 0.0, 0.0], "fov": 40.0}
-
-
-def interior_of(object_id):
-    hit = object_id >= 0
-    inner = hit.copy()
-    for axis in (0, 1):
-        for shift in (1, -1):
-            inner &= np.roll(hit, shift, axis=axis)
-    return inner
-
-
-def agree(ras, ray, tolerance=3e-3, share=0.99, min_pixels=2000):
-    """Raster and raycast agree to `tolerance` on `share` of the pixels inside both silhouettes."""
-    inner = interior_of(ray.aovs["object_id"]) & interior_of(ras.aovs["object_id"])
-    assert inner.sum() > min_pixels
-    err = np.abs(ras.array - ray.array).max(axis=2)[inner]
-    assert np.mean(err < tolerance) >= share, np.quantile(err, share)
-
-
-def sphere_mesh(segments=64):
-    """A smooth uv sphere (vertices, faces, normals, uvs) from lumos's own tessellator."""
-    from lumos.compile.tessellate import tessellate_shape
-    from lumos.kernels import layout as L
-
-    t = tessellate_shape(L.SHAPE_SPHERE, np.eye(4), segments, True)
-    return t.vertices, t.faces, t.normals, t.uvs
+LIGHTS, CAMERA = TEXTURE_LIGHTS, TEXTURE_CAMERA
 
 
 def checker_png(path, cells=8, size=256):

@@ -1,0 +1,54 @@
+"""Helpers that more than one test module uses (test modules import this, never each other)."""
+
+import numpy as np
+
+
+#: Lights and camera of the textured scenes that raster and raycast draw alike (test_raster_textures,
+#: test_material_maps).
+TEXTURE_LIGHTS = [
+    {"type": "point", "position": [3.0, 4.0, 5.0], "intensity": [1.0, 0.95, 0.9]},
+    {"type": "directional", "direction": [0.4, -1.0, -0.6], "intensity": 0.3},
+]
+TEXTURE_CAMERA = {"position": [0.3, 0.4, 3.2], "look_at": [0.0, 0.0, 0.0], "fov": 40.0}
+
+
+def interior_of(object_id):
+    hit = object_id >= 0
+    inner = hit.copy()
+    for axis in (0, 1):
+        for shift in (1, -1):
+            inner &= np.roll(hit, shift, axis=axis)
+    return inner
+
+
+def agree(ras, ray, tolerance=3e-3, share=0.99, min_pixels=2000):
+    """Raster and raycast agree to `tolerance` on `share` of the pixels inside both silhouettes."""
+    inner = interior_of(ray.aovs["object_id"]) & interior_of(ras.aovs["object_id"])
+    assert inner.sum() > min_pixels
+    err = np.abs(ras.array - ray.array).max(axis=2)[inner]
+    assert np.mean(err < tolerance) >= share, np.quantile(err, share)
+
+
+def sphere_mesh(segments=64):
+    """A smooth uv sphere (vertices, faces, normals, uvs) from lumos's own tessellator."""
+    from lumos.compile.tessellate import tessellate_shape
+    from lumos.kernels import layout as L
+
+    t = tessellate_shape(L.SHAPE_SPHERE, np.eye(4), segments, True)
+    return t.vertices, t.faces, t.normals, t.uvs
+
+
+def check_pieces(model) -> None:
+    """An imported model's objects are well-formed scene pieces (io.models)."""
+    for obj in model.objects:
+        n = len(obj["vertices"])
+        assert obj["vertices"].dtype == np.float64 and obj["vertices"].shape == (n, 3)
+        assert obj["faces"].dtype == np.int64 and obj["faces"].shape[1] == 3
+        assert obj["faces"].min() >= 0 and obj["faces"].max() < n
+        assert np.isfinite(obj["vertices"]).all()
+        assert obj["material"] is None or obj["material"] in model.materials
+        if "normals" in obj:
+            assert obj["normals"].shape == (n, 3)
+            np.testing.assert_allclose(np.linalg.norm(obj["normals"], axis=1), 1.0, atol=1e-9)
+        if "uvs" in obj:
+            assert obj["uvs"].shape == (n, 2) and np.isfinite(obj["uvs"]).all()
