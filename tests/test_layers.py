@@ -71,11 +71,11 @@ def read_imports(root: Path):
     return modules, edges
 
 
-def private_attributes(root: Path, modules: dict):
+def private_attributes(modules: dict, edges: list):
     """`module._name` reads where `module` is another lumos module imported under a name: (reader, line, what)."""
     found = []
     imported = defaultdict(set)  # module: the names it binds to lumos modules
-    for a, b, name, _ in read_imports(root)[1]:
+    for a, b, name, _ in edges:
         if name is None and b in modules:
             imported[a].add(b.rsplit(".", 1)[-1])
     for mod, path in modules.items():
@@ -170,7 +170,7 @@ def test_no_module_imports_itself_round_a_loop(lumos_imports):
 def test_no_module_imports_or_reads_another_modules_private_names(lumos_imports):
     modules, edges = lumos_imports
     assert private_imports(edges) == []
-    assert private_attributes(SRC, modules) == []
+    assert private_attributes(modules, edges) == []
 
 
 def test_the_checks_catch_what_they_are_for(tmp_path):
@@ -192,4 +192,4 @@ def test_the_checks_catch_what_they_are_for(tmp_path):
     assert set(cycles(modules, edges)) == {frozenset({"pkg.low.a", "pkg.high.b"}),
                                            frozenset({"pkg.high.c", "pkg.high.d"})}
     assert private_imports(edges) == ["pkg.high.c:1 imports _secret from pkg.high.b"]
-    assert private_attributes(root, modules) == [("pkg.high.b", 4, "a._hidden")]
+    assert private_attributes(modules, edges) == [("pkg.high.b", 4, "a._hidden")]

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-
-import numba
 import numpy as np
 
 from .. import config
 from ..kernels.bvh_build import MAX_DEPTH, build_nodes
+from ..kernels.threads import parallel_for
 from .memory import aligned_copy, aligned_zeros
 
 
@@ -18,8 +16,8 @@ def build(prim_bounds: np.ndarray, first_shape: int | None = None, threads: int 
     (nn, 6), node_link int32 (nn, 2), order int64 (n,), depth). An empty scene gives an empty tree.
 
     The top of the tree is built first; its small subtrees (tasks) are then built on `threads` Python threads
-    (default: Numba's thread count), each task into a node region of its own, and the regions closed up in task
-    order, so the tree is the same on any number of threads."""
+    (`threads.parallel_for`; default: Numba's thread count), each task into a node region of its own, and the
+    regions closed up in task order, so the tree is the same on any number of threads."""
     n = len(prim_bounds)
     if n == 0:
         return np.zeros((0, 6), np.float32), np.zeros((0, 2), np.int32), np.zeros(0, np.int64), 0
@@ -51,17 +49,9 @@ def build(prim_bounds: np.ndarray, first_shape: int | None = None, threads: int 
     big_box[:top_end], big_link[:top_end] = node_box[:top_end], node_link[:top_end]
     ends, depths = np.empty(n_tasks, np.int64), np.empty(n_tasks, np.int64)
 
-    def run(k):
-        build_nodes(tasks, bases, np.int64(k), np.int64(k + 1), order, bounds, cent, *settings, np.int64(0),
-                    big_box, big_link, ends, depths, tasks)
-
-    workers = threads or numba.get_num_threads()
-    if workers > 1:
-        with ThreadPoolExecutor(workers) as pool:  # build_nodes releases the GIL
-            list(pool.map(run, range(n_tasks)))
-    else:
-        for k in range(n_tasks):
-            run(k)
+    parallel_for(lambda k0, k1: build_nodes(tasks, bases, np.int64(k0), np.int64(k1), order, bounds, cent, *settings,
+                                            np.int64(0), big_box, big_link, ends, depths, tasks),
+                 0, n_tasks, grain=1, threads=threads)  # build_nodes releases the GIL
     # close the gaps between regions, shifting the child links that point into a region
     used = ends - bases
     shift = bases - (top_end + np.concatenate(([0], np.cumsum(used)[:-1])))

@@ -47,7 +47,7 @@ BIN_CHUNK = 4096
 @njit_serial
 def project_vertices(positions, cam_vecs, cam_params, width, height, near, clip, screen):
     """clip[i] = (X, Y, W, D); screen[i] = (x, y, key, 1/W) for vertices with D >= near (NaN-free otherwise).
-    Serial: a million vertices take a few milliseconds."""
+    Serial: a million vertices take about 8 ms on one core."""
     ortho = cam_params[CAM_ORTHO] != 0.0
     aspect = width / height
     if ortho:

@@ -110,17 +110,16 @@ class Buffers:
     rays_per_row: np.ndarray
 
 
-def start(settings, bytes_per_pixel: int = 64, surface_aovs: str = "always") -> tuple[int, Buffers]:
+def start(settings, bytes_per_pixel: int = 64, aovs_if_asked: bool = False) -> tuple[int, Buffers]:
     """Every render's first steps: refuse what the method cannot do (`capabilities.check_settings`) and images
-    that would not fit in memory, take the threads asked for, and allocate the buffers. `surface_aovs`:
-    "always" allocates the surface AOV buffers, "asked" only when one of them is asked for (None otherwise: a
-    kernel that takes None compiles without the stores), "none" leaves them to the caller. Returns (threads,
-    buffers)."""
+    that would not fit in memory, take the threads asked for, and allocate the buffers. With `aovs_if_asked` the
+    surface AOV buffers are allocated only when one of them is asked for (None otherwise: a kernel that takes
+    None compiles without the stores). Returns (threads, buffers)."""
     width, height = settings.width, settings.height
     check_settings(settings)
     check_memory(width, height, bytes_per_pixel=bytes_per_pixel)
     threads = set_threads(settings.threads)
-    want = surface_aovs == "always" or (surface_aovs == "asked" and any(a in SURFACE_AOVS for a in settings.aov))
+    want = not aovs_if_asked or any(name in SURFACE_AOVS for name in settings.aov)
     depth, normal, albedo, object_id = allocate_aovs(height, width) if want else (None, None, None, None)
     want_terms = any(name in TERM_AOVS for name in settings.aov)
     terms = np.zeros((height, width, TERM_CHANNELS) if want_terms else (1, 1, TERM_CHANNELS), np.float32)

@@ -458,7 +458,7 @@ class RasterFrame:
 def render_raster(compiled, camera, settings, progress=None) -> Film:
     """Scan-line render `compiled` (a `CompiledScene` compiled for method raster) with `settings`."""
     width, height = settings.width, settings.height
-    threads, b = start(settings, bytes_per_pixel=96, surface_aovs="asked")
+    threads, b = start(settings, bytes_per_pixel=96, aovs_if_asked=True)
     frame = RasterFrame(compiled, camera, settings)
     surface = (b.depth, b.normal, b.albedo, b.object_id) if b.depth is not None else None
     n = len(frame.offsets)

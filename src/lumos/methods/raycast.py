@@ -126,7 +126,7 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
     width, height = settings.width, settings.height
     # the surface AOV buffers only when one of them is asked for (writing them costs about a fifth of a render of
     # a large mesh: BENCHMARKS.md)
-    threads, b = start(settings, surface_aovs="asked")
+    threads, b = start(settings, aovs_if_asked=True)
     spp = 1 if settings.antialias == "none" else settings.spp
     cam_vecs, cam_params = camera_arrays(camera)
     pixel, light_log, bands = _NO_PIXEL, np.zeros((0, PER_LIGHT_SIZE)), None
