@@ -2,8 +2,9 @@
 
     patches = mesh_scene(scene, patch_size=0.1, segments=48)
 
-- meshes and triangles: their triangles (after the mesh keys' fix-ups), each cut into k² triangles of edge at
-  most `patch_size` (a barycentric grid);
+- meshes and triangles: their triangles (after the mesh keys' fix-ups), each cut into k² triangles whose
+  longest edge is at most √2·`patch_size` (a barycentric grid; a triangle with legs of `patch_size` is half a
+  grid cell);
 - boxes, rects and planes: quads cut into a grid of cells at most `patch_size` on a side; a plane is clipped
   to the rectangle that covers the rest of the scene's bounds (10% larger), since an infinite floor has no
   finite patches;
@@ -16,7 +17,8 @@
 **Sides.** Light may reach either side of an open surface (a wall, a disk, a triangle, a mesh), so each side of
 its polygons is a patch of its own, facing its own way; a closed solid (sphere, box, capped cylinder or cone, a
 watertight consistently wound mesh) has its outside, and its inside too only when a light or the camera is
-inside it (a room built as a box). A side that is not a patch (the inside of a solid, the back of a one-sided
+inside it (a room built as a box); when every light and the camera are inside, its outside is no patch (no
+light reaches it and no eye sees it: the furnace, the closed room). A side that is not a patch (the inside of a solid, the back of a one-sided
 light) still blocks light. The polygons (`polys`) are the geometry, shared by both
 sides; `side_patch` maps each polygon's front (the side its normal points to) and back to a patch.
 
@@ -113,18 +115,19 @@ def _grid_quads(corner, eu, ev, patch_size):
 
 
 def _split_triangles(verts, tris, patch_size):
-    """Each triangle cut into k² triangles (a barycentric grid, k from its longest edge); vertices on shared
-    edges are not merged (the patches of neighbouring triangles meet edge to edge all the same)."""
+    """Each triangle cut into k² triangles (a barycentric grid, k from its longest edge over √2·patch_size: a
+    triangle whose legs are at most patch_size is half of a grid cell, and as large as a patch may be); vertices
+    on shared edges are not merged (the patches of neighbouring triangles meet edge to edge all the same)."""
     out_v, out_t = [], []
     base = 0
     tris = np.asarray(tris, np.int64)
     a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
     longest = np.max(np.stack([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
                                np.linalg.norm(a - c, axis=1)]), axis=0)
-    ks = np.maximum(1, np.ceil(longest / patch_size - 1e-9)).astype(np.int64)
+    ks = np.maximum(1, np.ceil(longest / (math.sqrt(2.0) * patch_size) - 1e-9)).astype(np.int64)
     if np.all(ks == 1):
         return verts, tris
-    for k in np.unique(ks):
+    for k in np.unique(ks[ks > 1]):  # (triangles with k = 1 are kept whole below)
         sel = np.nonzero(ks == k)[0]
         # the grid's barycentric points (i, j) with i + j <= k, and its k² small triangles
         pts = [(i, j) for i in range(k + 1) for j in range(k + 1 - i)]
@@ -199,23 +202,33 @@ def _inside_canonical(kind: int, q: np.ndarray) -> np.ndarray:
     return np.zeros(len(q), bool)
 
 
-def _points_inside_solid(kind, world_from_canonical, points) -> bool:
-    if not len(points):
-        return False
+def _inside_solid(kind, world_from_canonical, points) -> np.ndarray:
+    """Which points (m, 3) are inside the solid `kind` placed by `world_from_canonical`."""
     inv = np.linalg.inv(world_from_canonical)
-    q = points @ inv[:3, :3].T + inv[:3, 3]
-    return bool(np.any(_inside_canonical(kind, q)))
+    return _inside_canonical(kind, points @ inv[:3, :3].T + inv[:3, 3])
 
 
-def _points_inside_mesh(verts, tris, points) -> bool:
-    if not len(points):
-        return False
+def _inside_mesh(verts, tris, points) -> np.ndarray | None:
+    """Which points (m, 3) are inside the closed mesh; None when trimesh cannot tell."""
     try:
         import trimesh
 
-        return bool(np.any(trimesh.Trimesh(verts, tris, process=False).contains(points)))
-    except Exception:  # noqa: BLE001  (no answer: give it an inside, which is never wrong, only costlier)
-        return True
+        return np.asarray(trimesh.Trimesh(verts, tris, process=False).contains(points), bool)
+    except Exception:  # noqa: BLE001
+        return None
+
+
+def _sides(inside: np.ndarray | None, clear: bool, scene) -> tuple[bool, bool]:
+    """Which sides of a closed solid are patches, (outside, inside), from which of the viewpoints
+    (`_viewpoints`) are inside it (None: unknown). The inside is one when a viewpoint is in it (a room built as
+    a box) or the solid is transparent; the outside is one unless every viewpoint is inside and no light
+    comes from infinitely far (a closed furnace, the camera in a room-box): then no light reaches the outside
+    and no eye sees it. When trimesh cannot tell, both."""
+    if inside is None:
+        return True, True
+    everything_inside = (len(inside) > 0 and bool(np.all(inside))
+                         and not any(light.type == "directional" for light in scene.lights))
+    return clear or not everything_inside, clear or bool(np.any(inside))
 
 
 def _viewpoints(scene, exclude: int) -> np.ndarray:
@@ -313,32 +326,33 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
             if not pieces:
                 continue
             offsets = np.cumsum([0] + [len(p.vertices) for p in pieces])
-            seen_inside = _points_inside_mesh(np.concatenate([p.vertices for p in pieces]),
-                                              np.concatenate([p.faces + k for p, k in zip(pieces, offsets)]),
-                                              _viewpoints(scene, object_id))
+            inside = _inside_mesh(np.concatenate([p.vertices for p in pieces]),
+                                  np.concatenate([p.faces + k for p, k in zip(pieces, offsets)]),
+                                  _viewpoints(scene, object_id))
             for piece in pieces:
                 mat, rho, le = material_row(piece.material)
                 b.optics = optics(piece.material)
-                inner = seen_inside or any(c > 0 for c in piece.material.kt)
+                outer, inner = _sides(inside, any(c > 0 for c in piece.material.kt), scene)
                 v, t = _split_triangles(piece.vertices, piece.faces, patch_size)
-                b.add(v, t, True, inner, rho, le, object_id, mat, n_groups, True)  # the display smooths per solid
+                b.add(v, t, outer, inner, rho, le, object_id, mat, n_groups, True)  # the display smooths per solid
                 n_groups += 1
             continue
         if obj.type in ("mesh", "triangle"):
             m = prepare_mesh(obj, world)
             tris = np.asarray(m.polygons, np.int64)
             closed = obj.type == "mesh" and _closed_and_outward(m.vertices, tris)
-            inner = not closed or clear or _points_inside_mesh(m.vertices, tris, _viewpoints(scene, object_id))
+            outer, inner = (_sides(_inside_mesh(m.vertices, tris, _viewpoints(scene, object_id)), clear, scene)
+                            if closed else (True, True))
             v, t = _split_triangles(m.vertices, tris, patch_size)
-            b.add(v, t, True, inner, rho, le, object_id, mat, group, closed)
+            b.add(v, t, outer, inner, rho, le, object_id, mat, group, closed)
             continue
         kind, object_from_canonical = canonical(obj)
         w = object_from_canonical if world is None else world @ object_from_canonical
         if kind == L.SHAPE_BOX:
-            inner = clear or _points_inside_solid(kind, w, _viewpoints(scene, object_id))
+            outer, inner = _sides(_inside_solid(kind, w, _viewpoints(scene, object_id)), clear, scene)
             for corner, eu, ev in _box_faces(w):
                 v, q = _grid_quads(corner, eu, ev, patch_size)
-                b.add(v, q, True, inner, rho, le, object_id, mat, group, True)
+                b.add(v, q, outer, inner, rho, le, object_id, mat, group, True)
         elif kind == L.SHAPE_RECT:
             v, q = _grid_quads(w[:3, 3], w[:3, 0], w[:3, 1], patch_size)
             b.add(v, q, True, True, rho, le, object_id, mat, group)
@@ -352,9 +366,10 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
             capped = getattr(obj, "capped", True)
             closed = kind == L.SHAPE_SPHERE or (kind in (L.SHAPE_CYLINDER, L.SHAPE_CONE) and capped)
             t = tessellate_object(kind, w, segments, capped, f"objects[{object_id}]")  # checks w first
-            inner = not closed or clear or _points_inside_solid(kind, w, _viewpoints(scene, object_id))
+            outer, inner = (_sides(_inside_solid(kind, w, _viewpoints(scene, object_id)), clear, scene)
+                            if closed else (True, True))
             v, tris = _split_triangles(t.vertices, t.faces, patch_size)
-            b.add(v, tris, True, inner, rho, le, object_id, mat, group, closed)
+            b.add(v, tris, outer, inner, rho, le, object_id, mat, group, closed)
     # area lights: their emitting shapes, lit side only (the other side of a rect or disk blocks light)
     n_objects = len(scene.objects)
     b.optics = np.zeros(8)

@@ -38,8 +38,11 @@ def render_radiosity(compiled, camera, settings, progress=None, solution=None) -
     set_threads(settings.threads)  # the solve, too, runs on the threads asked for
     solve_rays = 0
     if solution is None:
-        solution = solve_compiled(compiled, settings)
+        # the bar covers the solve (its first 90%: shots, sweeps or iterations against the tolerance) and then
+        # the display
+        solution = solve_compiled(compiled, settings, None if progress is None else (lambda f: progress(0.9 * f)))
         solve_rays = int(solution.stats.get("rays", 0))
+        progress = None if progress is None else _after(progress, 0.9)
     elif isinstance(solution, (str, Path)):
         solution = Solution.load(solution, compiled.digest)
     elif solution.scene_digest and compiled.digest and solution.scene_digest != compiled.digest:
@@ -62,6 +65,11 @@ def render_radiosity(compiled, camera, settings, progress=None, solution=None) -
     film.extra = {"radiosity": dict(solution.stats)}
     film.rays += solve_rays  # the solve's shadow and visibility rays count as this render's rays
     return film
+
+
+def _after(progress, start: float):
+    """`progress` for the rest of a task, from `start` to 1."""
+    return lambda f: progress(start + (1.0 - start) * f)
 
 
 def _two_pass(solution, camera, settings, background, progress) -> Film:

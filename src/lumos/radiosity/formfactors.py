@@ -43,22 +43,32 @@ def hemicube_matrix(rs, level, seed, F) -> None:
 
 
 class HemicubeShooter:
-    """Progressive shots through a hemicube at each shooting patch, over the receiving elements' polygons."""
+    """Progressive shots through a hemicube at each shooting patch, over the receiving elements' polygons; the
+    form factors of up to `keep` shooters are kept (float32) for their next shots."""
 
-    def __init__(self, rs, level, seed):
+    def __init__(self, rs, level, seed, keep: int = 0):
         self.level = level
         self.seed = int(seed)
         self.dF = delta_form_factors(_res(rs))
         self.scratch = hemicube_scratch(self.dF.shape[1])
         self.ff = np.zeros(len(level.recv.area))
         self.scale = _extent(level.recv_patches)
+        self.keep = keep
+        self.kept: dict[int, np.ndarray] = {}  # shooter → F_j→i for every receiver i
 
     def shoot(self, j: int, d: np.ndarray, shot: int, radiance: np.ndarray, unshot: np.ndarray) -> None:
         from ..kernels.radiosity import hemicube_shot
 
         src, recv, geom = self.level.src, self.level.recv, self.level.recv_patches
+        if j in self.kept:  # a shooter shot before: the same hemicube, applied as the kernel does
+            got = recv.rho * (self.kept[j] * (float(src.area[j]) / recv.area))[:, None] * d
+            radiance += got
+            unshot += got
+            return
         x = tuple(src.centre[j] + src.normal[j] * (_LIFT * self.scale))
         phi = 2 * math.pi * rand01(self.seed, j, shot, 7)
         hemicube_shot(x, tuple(src.normal[j]), phi, geom.vertices, geom.polys, geom.poly_normal, geom.side_patch,
                       self.dF, _NEAR * self.scale, self.scratch, self.ff, float(src.area[j]), float(d[0]),
                       float(d[1]), float(d[2]), recv.area, recv.rho, radiance, unshot)
+        if len(self.kept) < self.keep:
+            self.kept[j] = self.ff.astype(np.float32)

@@ -10,8 +10,8 @@ as one, so refining costs receivers, not shooters.
 
 - **gauss_seidel** and **jacobi** (gathering): the whole matrix F first (ray-cast or hemicube form factors),
   then sweeps; Jacobi computes every patch from the previous iterate, Gauss–Seidel uses each new value at once
-  (it converges about twice as fast). They stop when a sweep changes no patch by more than `tolerance` times
-  the mean radiance of the surfaces. Only for scenes whose matrix fits in memory.
+  (it converges about twice as fast). They stop when the distance left to the solution, estimated from the
+  last two sweeps' largest changes (`remaining`), is below `tolerance` times the mean radiance of the surfaces. Only for scenes whose matrix fits in memory.
 - **progressive** refinement (Cohen, Chen, Wallace & Greenberg 1988): shoot the unshot light of the patch with
   the most unshot power (ΔL·A) to every other patch, form factors computed on the fly and forgotten; stop when
   the unshot power is below `tolerance` of the power sent out. Until then the display adds Cohen's ambient term
@@ -19,6 +19,7 @@ as one, so refining costs receivers, not shooters.
 - **stochastic** (Monte Carlo) radiosity: stochastic Jacobi iterations (Neumann et al. 1995; Bekaert's
   RenderPark): each iteration sends the unshot power of every patch by random rays (as many as its share of
   the power), the surfaces they hit keep ρ of it as their next unshot power; its error falls as 1/√rays.
+  The light still unshot when it stops is added as progressive refinement's ambient term.
 """
 
 from __future__ import annotations
@@ -44,6 +45,12 @@ SHOT_THRESHOLD = 1e-5
 #: with at least this share of the brightest one's unshot power.
 SHOT_BATCH = 16
 SHOT_BATCH_SHARE = 0.5
+#: Progressive: a shooter's form factors (what every receiver takes of its light) are kept, float32, for its next
+#: shots, up to this many bytes in all: a bright closed scene shoots each patch many times (the furnace: about
+#: ten), and recomputing the same column with its shadow rays each time made progressive refinement ten times
+#: slower than building the whole matrix. A fixed budget, not the free memory: which columns are kept, and so
+#: the image, must not depend on the machine.
+SHOT_CACHE_BYTES = 512 << 20
 #: Stochastic: chunks of rays (each with its own accumulation buffer, summed in order: thread-count
 #: independence), and the rays per patch of an iteration unless `rays` is given.
 STOCHASTIC_CHUNKS = 16
@@ -54,7 +61,7 @@ RAYS_PER_PATCH = 100
 class Result:
     radiance: np.ndarray  # float64 (n_elements, 3)
     iterations: int
-    residual: float  # unshot power / power sent (progressive, stochastic); last sweep's largest change over the
+    residual: float  # unshot power / power sent (progressive, stochastic); the estimated distance left over the
     # mean radiance (gauss_seidel, jacobi)
     rays: int
     form_factor_s: float
@@ -151,8 +158,9 @@ def gathering(rs, level: Level, sent, seed, progress, say) -> Result:
     radiance = sent.copy()
     means = level.patch_means(radiance)
     limit = rs.max_iterations or 1000
-    change = np.inf
+    change = previous = np.inf
     scale = 1.0
+    left = np.inf
     it = 0
     nxt = np.empty_like(radiance)
     while it < limit:
@@ -169,13 +177,27 @@ def gathering(rs, level: Level, sent, seed, progress, say) -> Result:
         # relative to the mean radiance of the surfaces (not to the brightest emitter, which would stop the
         # sweeps while the walls are still percents away)
         scale = max(float((_lum(radiance) * recv.area).sum() / recv.area.sum()), 1e-300)
+        left = remaining(change, previous) / scale
+        previous = change
         if say is not None:
-            say(f"sweep {it}: largest change {change / scale:.2e} of the mean radiance")
+            say(f"sweep {it}: largest change {change / scale:.2e} of the mean radiance, about {left:.2e} left")
         if progress is not None:
-            progress(min(1.0, np.log(max(change / scale, 1e-30)) / np.log(rs.tolerance)) if change > 0 else 1.0)
-        if change <= rs.tolerance * scale:
+            progress(min(1.0, np.log(max(left, 1e-30)) / np.log(rs.tolerance)) if left > 0 else 1.0)
+        if left <= rs.tolerance:
             break
-    return Result(radiance, it, change / scale, rays, ff_s)
+    return Result(radiance, it, left, rays, ff_s)
+
+
+def remaining(change: float, previous: float) -> float:
+    """How far the iterate still is from the solution, from the last two sweeps' largest changes: the sweeps
+    contract the error by about q = change/previous each, so what is left is about change·q/(1 − q) (a
+    geometric series). A bright closed scene (the furnace, ρ = 0.8: q ≈ 0.8) is 4 changes away, not one."""
+    if change == 0.0:
+        return 0.0
+    if not np.isfinite(previous) or previous <= 0.0:
+        return np.inf
+    q = min(change / previous, 0.999)
+    return change * q / (1.0 - q)
 
 
 # ---------------------------------------------------------------------------------------------- progressive
@@ -198,8 +220,11 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
     if rs.form_factors == "hemicube":
         from .formfactors import HemicubeShooter
 
-        hemi = HemicubeShooter(rs, level, seed)
+        hemi = HemicubeShooter(rs, level, seed, keep=SHOT_CACHE_BYTES // (4 * len(recv.area)))
     ff_s = 0.0
+    gain = Gain()
+    kept: dict[int, np.ndarray] = {}  # shooter → its form factors, float32 (n_elements,): SHOT_CACHE_BYTES
+    kept_max = SHOT_CACHE_BYTES // (4 * len(recv.area))
     shots = 0
     residual = 1.0
     next_report = 0.0
@@ -216,22 +241,35 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
         top = top[np.argsort(-power[top], kind="stable")]
         top = top[power[top] >= SHOT_BATCH_SHARE * power[top[0]]].astype(np.int64)
         d = unshot[top].copy()
+        before = recv.area @ unshot_e
         unshot_e[np.isin(level.recv_patch, top)] = 0.0
+        after = recv.area @ unshot_e
         t0 = time.perf_counter()
         if hemi is not None:
             for q, j in enumerate(top):
                 hemi.shoot(int(j), d[q], shots + q, radiance, unshot_e)
         else:
             ff = np.empty((len(recv.area), len(top)))
-            parallel_for(lambda c0, c1: shoot_raycast(level.bvh.arrays, recv, src, level.recv_patch, top, d,
-                                                      np.int64(rs.visibility_samples), np.int64(seed),
-                                                      np.int64(shots), threshold, ff, rays, np.int64(c0),
-                                                      np.int64(c1)), 0, len(rays))
-            got = _conserving(ff, recv.area, area[top]) @ d
+            todo = np.array([q for q, j in enumerate(top) if int(j) not in kept], np.int64)
+            if len(todo):
+                fresh = np.empty((len(recv.area), len(todo)))
+                parallel_for(lambda c0, c1: shoot_raycast(level.bvh.arrays, recv, src, level.recv_patch, top[todo],
+                                                          d[todo], np.int64(rs.visibility_samples), np.int64(seed),
+                                                          np.int64(shots), threshold, fresh, rays, np.int64(c0),
+                                                          np.int64(c1)), 0, len(rays))
+                ff[:, todo] = _conserving(fresh, recv.area, area[top[todo]])
+                for q in todo:
+                    if len(kept) < kept_max:
+                        kept[int(top[q])] = ff[:, q].astype(np.float32)
+            for q, j in enumerate(top):
+                if int(j) in kept and q not in todo:
+                    ff[:, q] = kept[int(j)]
+            got = ff @ d
             got *= recv.rho
             radiance += got
             unshot_e += got
         ff_s += time.perf_counter() - t0
+        gain.add(before - after, recv.area @ unshot_e - after)
         shots += len(top)
         if progress is not None:
             progress(min(1.0, np.log(max(residual, 1e-30)) / np.log(rs.tolerance)))
@@ -239,7 +277,7 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
             say(f"shot {shots}: unshot power {residual:.2%} of what was sent")
             next_report = time.perf_counter() + 1.0
     residual = float((_lum(unshot_e) * recv.area).sum()) / total
-    radiance = radiance + ambient_term(recv, unshot_e)
+    radiance = radiance + ambient_term(recv, unshot_e, gain.value())
     return Result(radiance, shots, residual, int(rays.sum()), ff_s)
 
 
@@ -263,13 +301,38 @@ def _conserving(ff: np.ndarray, recv_area: np.ndarray, src_area: np.ndarray) -> 
     return ff
 
 
-def ambient_term(pa, unshot: np.ndarray) -> np.ndarray:
-    """Cohen et al. 1988's ambient correction for a progressive solution not yet converged: the unshot
-    radiance, area-averaged, bounced by the mean reflectance ρ̄ forever (1/(1 − ρ̄)), reflected by each patch."""
+class Gain:
+    """The share of the power shot so far that came back as unshot power (per channel): how much of its light a
+    shot hands on, the mean reflectance times how closed the scene is (0.8 in the furnace of ρ = 0.8; about
+    0.12 for a lamp above a square of ρ = 0.6, whose light mostly leaves the scene)."""
+
+    def __init__(self):
+        self.shot = np.zeros(3)
+        self.kept = np.zeros(3)
+
+    def add(self, shot: np.ndarray, kept: np.ndarray) -> None:
+        self.shot += shot
+        self.kept += kept
+
+    def value(self) -> np.ndarray | None:
+        if not np.all(self.shot > 0.0):
+            return None
+        return np.clip(self.kept / self.shot, 0.0, 0.999)
+
+
+def ambient_term(pa, unshot: np.ndarray, gain: np.ndarray | None = None) -> np.ndarray:
+    """Cohen et al. 1988's ambient correction for a solution not yet converged: the light still unshot, handed
+    on by each bounce's `gain` g forever (g + g² + … = g/(1 − g) of it: the area-weighted radiance to come),
+    shared among the elements in proportion to ρ_i·A_i. Cohen's closed-scene term takes g = ρ̄, the mean
+    reflectance (used when no shot has been measured yet); `Gain` measures it, so that an open scene, whose
+    light mostly leaves, gets the little ambient light it has (a lamp above one square: +2.8% with ρ̄)."""
     area = pa.area
-    mean_unshot = (unshot * area[:, None]).sum(axis=0) / area.sum()
-    rho_bar = (pa.rho * area[:, None]).sum(axis=0) / area.sum()
-    return pa.rho * (mean_unshot / np.maximum(1.0 - rho_bar, 1e-3))
+    left = area @ unshot  # (3,): the unshot power (area-weighted radiance)
+    rho_a = area @ pa.rho
+    if gain is None:
+        gain = np.clip(rho_a / area.sum(), 0.0, 0.999)
+    to_come = left * gain / (1.0 - gain)
+    return pa.rho * (to_come / np.maximum(rho_a, 1e-300))
 
 
 # ----------------------------------------------------------------------------------------------- stochastic
@@ -287,6 +350,7 @@ def stochastic(rs, level: Level, sent, seed, progress, say) -> Result:
     total = float((_lum(sent) * recv.area).sum())
     per_iteration = rs.rays or RAYS_PER_PATCH * len(area)
     limit = rs.max_iterations or 64
+    gain = Gain()
     received = np.zeros((STOCHASTIC_CHUNKS, n, 3))
     counts_out = np.zeros(STOCHASTIC_CHUNKS, np.int64)
     rays = 0
@@ -313,6 +377,7 @@ def stochastic(rs, level: Level, sent, seed, progress, say) -> Result:
                                                      np.int64(c1)), 0, STOCHASTIC_CHUNKS, grain=1)
         rays += int(counts_out.sum())
         gained = received.sum(axis=0) / (np.pi * recv.area[:, None])  # power → radiance of the receiving element
+        gain.add(recv.area @ unshot_e, recv.area @ gained)
         unshot_e = gained
         radiance = radiance + gained
         it += 1
@@ -321,4 +386,5 @@ def stochastic(rs, level: Level, sent, seed, progress, say) -> Result:
         if progress is not None:
             progress(min(1.0, np.log(max(residual, 1e-30)) / np.log(rs.tolerance)))
     residual = float((_lum(unshot_e) * recv.area).sum()) / total
+    radiance = radiance + ambient_term(recv, unshot_e, gain.value())  # the light not yet shot, as progressive does
     return Result(radiance, it, residual, rays, 0.0)

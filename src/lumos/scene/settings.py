@@ -42,8 +42,8 @@ class RadiositySettings(StrictModel):
     subdivide: bool = False
     subdivide_threshold: Positive = 0.25
     subdivide_levels: Annotated[int, Field(ge=1, le=8)] = 2
-    #: stop when the unshot power (progressive, stochastic) or the largest change of a sweep (gauss_seidel,
-    #: jacobi), relative to the light sent out, falls below this
+    #: stop when the unshot power relative to the power sent (progressive, stochastic), or the distance left to
+    #: the solution relative to the mean radiance (gauss_seidel, jacobi), falls below this
     tolerance: Annotated[float, Field(gt=0, lt=1)] = 0.01
     #: at most this many shots (progressive), sweeps (gauss_seidel, jacobi) or iterations (stochastic)
     max_iterations: Optional[Annotated[int, Field(ge=1)]] = None
