@@ -113,7 +113,7 @@ def test_bad_setting_flag(capsys, tiny, tmp_path):
 
 
 def test_internal_error_exit_1_with_hint(capsys, monkeypatch, tiny, tmp_path):
-    def boom(source):
+    def boom(source, **_):
         raise RuntimeError("kaboom")
 
     monkeypatch.setattr("lumos.scene.loader.load_scene", boom)
@@ -126,7 +126,7 @@ def test_internal_error_exit_1_with_hint(capsys, monkeypatch, tiny, tmp_path):
 
 
 def test_keyboard_interrupt_exit_130(capsys, monkeypatch, tiny, tmp_path):
-    def interrupted(source):
+    def interrupted(source, **_):
         raise KeyboardInterrupt
 
     monkeypatch.setattr("lumos.scene.loader.load_scene", interrupted)

@@ -93,3 +93,27 @@ def render_or_refuse(scene, method):
 @given(scene=SCENES)
 def test_random_scenes_render_or_fail_in_one_line(method, scene):
     render_or_refuse(scene, method)
+
+
+@pytest.mark.parametrize("value", [1e18, 1e30, 2.0 ** 63])
+def test_a_huge_kr_or_kt_is_refused_naming_the_key(value):
+    """Issue 28's fuzzing: of 30,000 mutated Whitted scenes, 4 were accepted and rendered non-finite pixels, all
+    with a kr or kt of 1e18 or more compounding through the recursion. Both are shares of light, in [0, 1]."""
+    for key in ("kr", "kt"):
+        scene = {"lights": [{"type": "point", "position": [0, 3, 3]}],
+                 "objects": [{"type": "sphere", "material": {"kd": 0.2, key: value}},
+                             {"type": "plane", "point": [0, -1, 0], "normal": [0, 1, 0], "material": {"kr": 0.5}}]}
+        with pytest.raises(LumosError, match=rf"objects\[0\]\.material\.{key}\[0\]: must be at most 1"):
+            lumos.render(scene, method="whitted", width=8, height=6)
+
+
+def test_the_largest_shares_through_the_deepest_recursion_stay_finite():
+    """kr = kt = 1 (the most the model accepts) between two facing mirrors at the deepest recursion whitted
+    allows: every pixel finite."""
+    mirror = {"kd": 0.1, "kr": 1.0, "kt": 1.0, "ior": 1.5}
+    scene = {"lights": [{"type": "point", "position": [0, 0, 0], "intensity": 1e30}],
+             "objects": [{"type": "plane", "point": [0, 0, -1], "normal": [0, 0, 1], "material": mirror},
+                         {"type": "plane", "point": [0, 0, 1], "normal": [0, 0, -1], "material": mirror}],
+             "camera": {"position": [0, 0, 0.5], "look_at": [0.3, 0, -1]}}
+    img = lumos.render(scene, method="whitted", width=6, height=4, max_depth=1024, antialias="none")
+    assert np.all(np.isfinite(img.array))

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from lumos.mesh import (face_normals, repair_t_junctions, subdivide, triangulate, triangulate_polygon,
+from lumos.mesh import (face_normals, weld_ids, repair_t_junctions, subdivide, triangulate, triangulate_polygon,
                         vertex_normals)
 
 WEIGHTINGS = ("average", "area", "angle")
@@ -188,6 +188,42 @@ def test_creased_normals_match_naive_twin(weighting):
         copies = normals[source == v]
         gaps = np.linalg.norm(copies[:, None] - copies[None], axis=2) + np.eye(len(copies))
         assert gaps.min() > 1e-9
+
+
+def _split_along_a_seam(mesh):
+    """The mesh with the vertices of its faces left of x = 0 repeated: a seam of unshared vertices, as a file with
+    patches (the Utah teapot) or uv seams gives them."""
+    v, f = np.array(mesh.vertices, float), np.array(mesh.faces)
+    left = v[f].mean(axis=1)[:, 0] < 0
+    used = np.unique(f[left])
+    remap = np.arange(len(v))
+    remap[used] = len(v) + np.arange(len(used))
+    f[left] = remap[f[left]]
+    return np.concatenate([v, v[used]]), f
+
+
+def test_welding_removes_seams_and_keeps_a_faceted_cube_faceted():
+    """Repeated positions share normals (the seam of a split sphere shades as the sphere does), within the smaller
+    of the crease angle and WELD_CREASE (a cube given with a vertex per face corner stays faceted); the first n
+    output vertices are the input ones and `source` carries attributes over; without repeats nothing changes."""
+    v, f = _split_along_a_seam(trimesh.creation.uv_sphere(count=[16, 16]))
+    assert np.all(weld_ids(v)[len(v) - 10:] < len(v) - 10)  # the copies weld to the originals
+    v2, f2, n2, source = vertex_normals(v, f)
+    radial = v2 / np.linalg.norm(v2, axis=1, keepdims=True)
+    err = np.degrees(np.arccos(np.clip(np.einsum("ijk,ijk->ij", n2[f2], radial[f2]), -1, 1))).max()
+    _, f3, n3, _ = vertex_normals(v, f, weld=False)
+    err3 = np.degrees(np.arccos(np.clip(np.einsum("ijk,ijk->ij", n3[f3], radial[f3]), -1, 1))).max()
+    assert err < 1.0 < 5.0 < err3  # 0.4° against 5.6° along the seam unwelded
+    assert np.array_equal(v2[:len(v)], v) and np.array_equal(v2, v[source])
+    box = trimesh.creation.box()
+    cv, cf = box.vertices[box.faces].reshape(-1, 3), np.arange(36).reshape(-1, 3)
+    _, cf2, cn2, _ = vertex_normals(cv, cf)
+    fn, _ = face_normals(cv, cf)
+    np.testing.assert_allclose(cn2[cf2], np.repeat(fn[:, None], 3, axis=1), atol=1e-12)
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    out = vertex_normals(sphere.vertices, sphere.faces)
+    ref = vertex_normals(sphere.vertices, sphere.faces, weld=False)
+    assert all(np.array_equal(a, b) for a, b in zip(out, ref))
 
 
 def test_vertex_without_faces_and_bad_arguments():

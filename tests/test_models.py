@@ -94,19 +94,30 @@ def error_of(source) -> str:
 # ------------------------------------------------------------------------------------ a model on its own
 
 
-def test_bunny_scene_is_framed_from_plus_z():
+def test_bunny_scene_is_framed_three_quarter_from_its_front():
+    """A closed model: the front (+z on a tie), swung SWING degrees to its left and raised RAISE degrees, y up,
+    framed about the bounds' centre, lit by three point lights about the view."""
     scene = lumos.load_scene(BUNNY)
     cam = scene.camera
     assert cam.type == "perspective" and cam.fov == 40 and tuple(cam.up) == (0, 1, 0)
-    view = np.subtract(cam.look_at, cam.position)
-    assert view[0] == 0 and view[1] == 0 and view[2] < 0  # from +z towards -z
     lo, hi = from_model.model_bounds([{"type": "mesh", "vertices": scene.objects[0].vertices}])
     assert np.allclose(cam.look_at, (lo + hi) / 2)
+    d = np.subtract(cam.position, cam.look_at)
+    d /= np.linalg.norm(d)
+    assert math.degrees(math.asin(d[1])) == pytest.approx(from_model.RAISE)
+    front = from_model.front_direction([{"type": "mesh", "vertices": scene.objects[0].vertices,
+                                         "faces": scene.objects[0].faces}])
+    horizontal = np.array([d[0], 0.0, d[2]]) / math.hypot(d[0], d[2])
+    assert math.degrees(math.acos(horizontal @ front)) == pytest.approx(from_model.SWING)
     assert [light.type for light in scene.lights] == ["point"] * 3
     keys = [light.intensity[0] for light in scene.lights]
     assert keys[0] > keys[2] > keys[1] > 0  # key > rim > fill
+    # the key light is up-left of the view: left of the camera's right vector, above the model
+    right = np.cross(cam.up, d)
+    key = np.subtract(scene.lights[0].position, cam.look_at)
+    assert key @ right < 0 and key[1] > 0 and key @ d > 0
     assert scene.render.method == "whitted" and scene.objects[0].material is None  # the default white-grey
-    assert scene.source == BUNNY
+    assert scene.source == BUNNY and scene.made_for_model
 
 
 def _quad(corners):
@@ -114,8 +125,8 @@ def _quad(corners):
 
 
 def test_one_sided_models_are_seen_from_the_side_their_faces_show():
-    """A floor is not framed edge-on, a wall facing -z not from behind; a closed surface keeps the +z front
-    view; the direction is a unit vector and the floor's camera looks down at TILT degrees."""
+    """A floor is not framed edge-on, a wall facing -z not from behind; a closed surface is not one-sided (None:
+    the three-quarter view); the direction is a unit vector and the floor's camera looks down at TILT degrees."""
     floor = _quad([[-1, 0, 1], [1, 0, 1], [1, 0, -1], [-1, 0, -1]])  # counter-clockwise seen from above: +y
     ceiling = _quad([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]])
     back = _quad([[-1, -1, 0], [-1, 1, 0], [1, 1, 0], [1, -1, 0]])  # faces -z
@@ -126,14 +137,86 @@ def test_one_sided_models_are_seen_from_the_side_their_faces_show():
     np.testing.assert_allclose(from_model.view_direction([ceiling]), [0, -s, c], atol=1e-12)
     np.testing.assert_allclose(from_model.view_direction([back]), [0, 0, -1], atol=1e-12)
     np.testing.assert_allclose(from_model.view_direction([side]), [-s, 0, c], atol=1e-12)
-    np.testing.assert_allclose(from_model.view_direction([back, _quad([[-1, -1, 1], [1, -1, 1], [1, 1, 1],
-                                                                         [-1, 1, 1]])]), [0, 0, 1])  # balanced
-    bunny = lumos.load_scene(BUNNY)  # nearly closed: the front view
-    np.testing.assert_allclose(from_model.view_direction([{"type": "mesh", "vertices": bunny.objects[0].vertices,
-                                                           "faces": bunny.objects[0].faces}]), [0, 0, 1])
+    assert from_model.view_direction([back, _quad([[-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]])]) is None
+    bunny = lumos.load_scene(BUNNY)  # nearly closed: not one-sided
+    assert from_model.view_direction([{"type": "mesh", "vertices": bunny.objects[0].vertices,
+                                       "faces": bunny.objects[0].faces}]) is None
     # what `lumos render floor.ply` gets: a camera above the floor's plane looking down at it
     cam = from_model.scene_from_model(ImportedModel(source=Path("floor.obj"), objects=[floor]))[0]["camera"]
     assert cam["position"][1] > 0 and cam["position"][2] > 0
+
+
+def _box_mesh(lo, hi, inward=False, per_face=False):
+    """A box as a mesh wound outward (or inward), optionally with a vertex per face corner."""
+    v = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], float)
+    f = CUBE_F[:, ::-1] if inward else CUBE_F
+    if per_face:
+        v, f = v[f].reshape(-1, 3), np.arange(3 * len(f)).reshape(-1, 3)
+    return {"type": "mesh", "vertices": v, "faces": f}
+
+
+def test_up_axis_front_and_inside():
+    """The up axis: z for a model much taller along z than along y (not for glTF); the front: the side the most
+    faces face; a box seen from inside (wound inward, open on one side) is looked into straight from its open
+    side, with its lights near the view's axis so that they shine in."""
+    tall = _box_mesh((0, 0, 0), (1, 1, 2))
+    assert from_model.up_axis([tall]) == "z" and from_model.up_axis([tall], "bottle.gltf") == "y"
+    assert from_model.up_axis([_box_mesh((0, 0, 0), (1, 1, 1.3))]) == "y"
+    # a cube whose -x face is cut into many triangles: its front is -x (y-up) ...
+    detail = _quad([[-1.01, -1, -1], [-1.01, -1, 1], [-1.01, 1, 1], [-1.01, 1, -1]])
+    fine = {"type": "mesh", "vertices": detail["vertices"], "faces": np.repeat(detail["faces"], 8, axis=0)}
+    np.testing.assert_allclose(from_model.front_direction([_box_mesh((-1, -1, -1), (1, 1, 1)), fine]), [-1, 0, 0])
+    # ... and with z up the front of a plain cube is -y
+    np.testing.assert_allclose(from_model.front_direction([_box_mesh((-1, -1, -1), (1, 1, 1))], "z"), [0, -1, 0])
+    room = _box_mesh((-1, -1, -1), (1, 1, 1), inward=True)
+    room["faces"] = room["faces"][[i for i in range(12) if i not in (2, 3)]]  # the +z wall left out: open at +z
+    assert from_model.faces_inward([room]) and not from_model.faces_inward([_box_mesh((-1, -1, -1), (1, 1, 1))])
+    scene, about = from_model.scene_from_model(ImportedModel(source=Path("room.obj"), objects=[room]))
+    d = np.subtract(scene["camera"]["position"], scene["camera"]["look_at"])
+    np.testing.assert_allclose(d / np.linalg.norm(d), [0, 0, 1], atol=1e-12)  # straight in through the opening
+    assert len(scene["lights"]) == 2
+    for light in scene["lights"]:  # each shines in through the opening: its ray to the centre crosses z = 1 inside
+        p = np.asarray(light["position"])
+        t = (p[2] - 1.0) / p[2]
+        assert np.all(np.abs(p[:2] * (1 - t)) < 1.0)
+
+
+@pytest.mark.parametrize("view, expected", [("front", [0, 0, 1]), ("back", [0, 0, -1]), ("left", [1, 0, 0]),
+                                            ("right", [-1, 0, 0]), ("top", [0, 1, 0])])
+def test_view_flag(view, expected, capsys, tmp_path):
+    """--view front|back|left|right|top puts the camera on that side (the model's left is the viewer's right);
+    --up z turns the frame; a scene file with its own camera refuses both, in one line."""
+    scene = lumos.load_scene(BUNNY, view=view)
+    d = np.subtract(scene.camera.position, scene.camera.look_at)
+    np.testing.assert_allclose(d / np.linalg.norm(d), expected, atol=1e-12)
+    if view == "top":
+        np.testing.assert_allclose(scene.camera.up, [0, 0, -1], atol=1e-12)
+    scene = lumos.load_scene(BUNNY, view=view, up="z")
+    if view == "top":  # from above (+z), the front at the bottom of the image: the camera's up is horizontal
+        d = np.subtract(scene.camera.position, scene.camera.look_at)
+        np.testing.assert_allclose(d / np.linalg.norm(d), [0, 0, 1], atol=1e-12)
+        assert scene.camera.up[2] == 0 and abs(np.linalg.norm(scene.camera.up) - 1) < 1e-12
+    else:
+        assert tuple(scene.camera.up) == (0, 0, 1)
+    if view == "front":
+        code, _, err = run(capsys, "render", BUNNY, "--view", "sideways", "-o", tmp_path / "o.png")
+        assert code == 2 and "--view: unknown view 'sideways'" in one_error_line(err)
+        scene_file = write(tmp_path, "objects: [{type: sphere}]\n")
+        code, _, err = run(capsys, "render", scene_file, "--up", "z", "-o", tmp_path / "o.png")
+        assert code == 2 and "frame a model file" in one_error_line(err)
+        assert not (tmp_path / "o.png").exists()
+
+
+def test_path_on_a_model_file_takes_enough_samples(fake_importer, tmp_path):
+    """A model file's made-up render block is whitted's 4 spp; `--method path` gets PATH_SPP unless --spp says."""
+    from lumos.api import resolve_settings
+
+    scene = lumos.load_scene(touch(tmp_path, "plain.obj"))
+    assert resolve_settings(scene, {"method": "path"}).spp == from_model.PATH_SPP
+    assert resolve_settings(scene, {"method": "path", "spp": 2}).spp == 2
+    assert resolve_settings(scene, {"method": "raycast"}).spp == 4
+    yaml_scene = lumos.load_scene({"objects": [{"type": "sphere"}], "render": {"spp": 4}})
+    assert resolve_settings(yaml_scene, {"method": "path"}).spp == 4 and not yaml_scene.made_for_model
 
 
 def test_framing_closed_form():
@@ -200,10 +283,12 @@ def test_model_with_camera_and_lights_uses_them(fake_importer, tmp_path):
     assert "the file's camera" in scene._included[0] and "the file's 1 light" in scene._included[0]
 
 
-def test_self_lit_model_uses_path_and_no_made_up_lights(fake_importer, tmp_path):
+def test_an_emissive_model_keeps_the_made_up_lights(fake_importer, tmp_path):
+    """A model with emissive parts seen from outside (the DamagedHelmet) is path-traced with the three-point
+    lights on (its emission adds to them); they used to be dropped, leaving only the glowing parts."""
     fake_importer["box.obj"] = lambda p: cube_model(p, emission=True)
     scene = lumos.load_scene(touch(tmp_path, "box.obj"))
-    assert scene.render.method == "path" and scene.lights == [] and scene.background == (0, 0, 0)
+    assert scene.render.method == "path" and len(scene.lights) == 3 and scene.background == (0.05,) * 3
     scene = lumos.load_scene(touch(tmp_path, "plain.obj"))
     assert scene.render.method == "whitted" and len(scene.lights) == 3
 
@@ -441,8 +526,11 @@ def test_mcguire_cornell_box_is_lit_by_its_ke_light(capsys, tmp_path):
     pytest.importorskip("lumos.io.obj")
     box = DATA / "models/CornellBox-Original.obj"
     scene = lumos.load_scene(box)
+    # seen from inside, straight through its open side, and lit by its own lamp only
     assert scene.render.method == "path" and scene.lights == []
     assert any(max(m.emission) > 0 for m in scene.materials.values())
+    d = np.subtract(scene.camera.position, scene.camera.look_at)
+    np.testing.assert_allclose(d / np.linalg.norm(d), [0, 0, 1], atol=1e-9)
     out = tmp_path / "box.npy"
     code, _, err = run(capsys, "render", box, "-o", out, "--width", "32", "--height", "24", "--spp", "4", "--quiet")
     assert code == 0, err
@@ -495,6 +583,22 @@ def test_importer_warnings_are_lumos_warnings(fake_importer, tmp_path, capsys):
         lumos.load_scene(write(tmp_path, "objects: [{type: model, file: sloppy.obj}]\n"))
     code, out, err = run(capsys, "info", tmp_path / "sloppy.obj")
     assert code == 0 and "lumos: warning: " in err and "missing.mtl" in err
+
+
+def test_each_distinct_importer_warning_once_with_a_count(fake_importer, tmp_path, capsys):
+    """26 map statements naming one missing texture are one warning with a count (Sibenik's MTL said it 26 times)."""
+    def sloppy(p):
+        m = cube_model(p)
+        m.warnings += [f"{p.name}.mtl:{n}: texture 'stone.png' not found; map_Kd ignored" for n in (4, 9, 17)]
+        m.warnings.append(f"{p.name}.mtl:20: texture 'wood.png' not found; map_Kd ignored")
+        return m
+
+    fake_importer["sloppy.obj"] = sloppy
+    code, _, err = run(capsys, "info", touch(tmp_path, "sloppy.obj"))
+    warned = [line for line in err.splitlines() if line.startswith("lumos: warning")]
+    assert code == 0 and len(warned) == 2, err
+    assert "stone.png' not found; map_Kd ignored (3 times; also lines 9, 17)" in warned[0]
+    assert "wood.png" in warned[1] and "times" not in warned[1]
 
 
 def test_a_scene_built_in_python_is_completed_like_a_loaded_one(tmp_path):

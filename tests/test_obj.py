@@ -10,7 +10,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image as PILImage
 
+from conftest import run_cli as run
 from helpers import check_pieces
 
 import lumos
@@ -250,13 +252,28 @@ def test_tr_alone_and_tr_1(tmp_path):
     assert any("m.mtl:7: Tr 1 would make the material invisible" in w for w in model.warnings)
 
 
+def test_an_unreadable_texture_is_a_warning_as_in_gltf(tmp_path, capsys):
+    """A map file that exists but is no image is a warning and the material goes without it (glTF's importer
+    does the same), said once however many map statements name it; the render does not fail."""
+    (tmp_path / "broken.png").write_bytes(b"not an image at all")
+    write(tmp_path, "m.mtl", "newmtl a\nKd 0.5 0.5 0.5\nmap_Kd broken.png\nnewmtl b\nKd 0.2 0.2 0.2\n"
+                              "map_Kd broken.png\n")
+    obj = write(tmp_path, "m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl a\nf 1/1 2/1 3/1\n")
+    model = import_obj(obj)
+    assert "texture" not in model.materials["a"] and model.materials["a"]["kd"] == [0.5] * 3
+    unreadable = [w for w in model.warnings_once() if "not a readable image" in w]
+    assert len(unreadable) == 1 and "(no image format Pillow knows); map_Kd ignored (2 times; also line 6)" in unreadable[0], model.warnings_once()
+    code, _, err = run(capsys, "render", obj, "-o", tmp_path / "o.npy", "--width", "8", "--height", "6", "--quiet")
+    assert code == 0 and np.isfinite(np.load(tmp_path / "o.npy")).all(), err
+
+
 def test_texture_options_issue_85(tmp_path):
     for name in ("m.obj", "m.mtl"):
         shutil.copy(TINY / f"texture-options-issue-85.{name[2:]}", tmp_path / name)
     (tmp_path / "m.obj").write_text((tmp_path / "m.obj").read_text().replace("texture-options-issue-85", "m"))
     for image in ("ambient", "diffuse", "specular", "specular_highlight", "bumpmap", "bumpmap2", "alpha", "bump",
                   "displacement"):
-        (tmp_path / f"{image}.jpg").write_bytes(b"")
+        PILImage.new("RGB", (2, 2), (90, 90, 90)).save(tmp_path / f"{image}.jpg")
     model = import_obj(tmp_path / "m.obj")
     assert not [w for w in model.warnings if "not found" in w]
     textures = {tuple(t["apply_to"]): t for t in model.materials["default"]["texture"]}
@@ -276,7 +293,7 @@ def test_texture_options_issue_85(tmp_path):
 
 def test_windows_paths_and_several_libraries_with_spaces(tmp_path):
     (tmp_path / "tex").mkdir()
-    (tmp_path / "tex" / "wood grain.png").write_bytes(b"")
+    PILImage.new("RGB", (2, 2)).save(tmp_path / "tex" / "wood grain.png")
     write(tmp_path, "my lib.mtl", "newmtl wood\nKd 1 1 1\nmap_Kd -s 2 2 tex\\wood grain.png\n")
     write(tmp_path, "b.mtl", "newmtl red\nKd 1 0 0\n")
     write(tmp_path, "c.mtl", "newmtl blue\nKd 0 0 1\n")
@@ -352,7 +369,7 @@ def test_mcguire_illum_5_and_7():
 
 
 def test_map_kd_of_illum_0_is_the_emitted_colour_and_map_ks_of_a_mirror_its_reflection(tmp_path):
-    (tmp_path / "t.png").write_bytes(b"")
+    PILImage.new("RGB", (2, 2)).save(tmp_path / "t.png")
     flat = one_material(tmp_path, "Kd 1 1 1\nmap_Kd t.png\nillum 0\n").materials["m"]
     assert flat["texture"]["apply_to"] == ["emission"]
     mirror = one_material(tmp_path, "Ks 0.5 0.5 0.5\nmap_Ks t.png\nmap_d t.png\nillum 3\n").materials["m"]

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Callable, Optional
 
 from .errors import LumosError, LumosWarning
 from .methods.capabilities import check_settings
+from .scene.from_model import PATH_SPP as MODEL_PATH_SPP
 from .scene.model import RenderSettings, Scene
 
 if TYPE_CHECKING:
@@ -74,6 +75,16 @@ def resolve_settings(scene: Scene, overrides: dict[str, Any]) -> RenderSettings:
         settings = settings.model_copy(update={"antialias": "supersample", "spp": spp})
         warnings.warn(LumosWarning(f"render.antialias: the scene's adaptive anti-aliasing is whitted's; "
                                    f"{settings.method} supersamples at {spp} spp instead"))
+    if (scene.made_for_model and settings.method == "path" and overrides.get("spp") is None
+            and settings.spp < MODEL_PATH_SPP):
+        # a bare model file: its made-up render block holds whitted's 4 spp; a path-traced image of it is not
+        # to be speckled
+        settings = settings.model_copy(update={"spp": MODEL_PATH_SPP})
+    if scene.made_for_model and settings.method == "path" and overrides.get("denoise") is None and not settings.denoise:
+        import importlib.util
+
+        if importlib.util.find_spec("pyoidn") is not None:  # denoised where Open Image Denoise is installed
+            settings = settings.model_copy(update={"denoise": True})
     check_settings(settings)
     return settings
 

@@ -158,12 +158,18 @@ def build_parser() -> argparse.ArgumentParser:
 
     render = commands.add_parser("render", help="render a scene to an image", description="Render SCENE. "
                                  "Flags override the scene's render: block.")
-    render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json), or a model file (.obj, "
+                        ".gltf, .glb, .ply, .stl, .off) framed and lit by lumos")
     render.add_argument("-o", "--output", metavar="OUT", help="image to write: .png, .exr, .pfm or .npy "
                         "(default: <scene name>.png in the current folder)")
     _render_flags(render)
     render.add_argument("--stats", metavar="FILE.json", help="write timings and ray counts as JSON")
     render.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
+    model = render.add_argument_group("a model file as SCENE")
+    model.add_argument("--view", metavar="V", help="three-quarter (default: from the front, swung and raised), "
+                       "front, back, left, right or top")
+    model.add_argument("--up", metavar="A", help="the model's up axis, y or z (default: y for glTF; for other "
+                       "formats z when the model is much taller along z than along y)")
     rad = render.add_argument_group("radiosity (--method radiosity)")
     rad.add_argument("--solution", metavar="FILE.npz", help="draw this saved solution (lumos radiosity solve) "
                      "instead of solving")
@@ -335,7 +341,7 @@ def run_render(args: argparse.Namespace, started: float) -> int:
     if args.stats:
         _check_stats_path(Path(args.stats))
     t0 = time.perf_counter()
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, view=args.view, up=args.up)
     load_s = time.perf_counter() - t0
     overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
     overrides.update(_radiosity_overrides(args))

@@ -12,6 +12,7 @@ a LumosError `<file>:<line>: <what>`.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -181,8 +182,38 @@ def _texture(rest: str, word: str, where: str, folder: Path, warnings) -> dict |
     if file is None:
         warnings.append(f"{where}: texture '{' '.join(name_parts)}' not found; {word} ignored")
         return None
+    problem = unreadable_image(file)
+    if problem is not None:  # as glTF's importer does: a warning and no texture, not a failed render
+        warnings.append(f"{where}: texture '{' '.join(name_parts)}' is not a readable image ({problem}); "
+                        f"{word} ignored")
+        return None
     opts["file"] = str(file)
     return opts
+
+
+_READABLE: dict[tuple, str | None] = {}
+
+
+def unreadable_image(path: Path) -> str | None:
+    """Why Pillow cannot read the image at `path` (its header and, for PNG, its chunks' checksums), or None
+    when it can; remembered per file, since a library names one image in many map statements."""
+    try:
+        stat = os.stat(path)
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
+    key = (str(path), stat.st_mtime_ns, stat.st_size)
+    if key not in _READABLE:
+        from PIL import Image as PILImage
+
+        try:
+            with PILImage.open(path) as img:
+                img.verify()
+            _READABLE[key] = None
+        except PILImage.UnidentifiedImageError:
+            _READABLE[key] = "no image format Pillow knows"
+        except Exception as exc:  # noqa: BLE001 -- Pillow raises many kinds on corrupt images
+            _READABLE[key] = " ".join(str(exc).replace(str(path), "").split())[:80] or type(exc).__name__
+    return _READABLE[key]
 
 
 def _texture_option(opts: dict, tok: str, args: list[str], word: str, where: str, warnings) -> None:

@@ -8,7 +8,8 @@ element defined last), polygons triangulated (`lumos.mesh.triangulate`: fans, ea
 the faces split into one mesh per (object or group, material) pair, in order of first appearance.
 
 Normals follow the file: a corner with `vn` keeps it; otherwise its smoothing group decides (`s 1`, `s 7`...:
-the faces of one group share an angle-weighted normal at each vertex they share, `lumos.mesh.vertex_normals`;
+the faces of one group share an angle-weighted normal at each position they share, repeated vertices welded,
+`lumos.mesh.vertex_normals`;
 `s off` / `s 0`: the face's own normal). A file with neither `vn` nor `s` says nothing about shading and
 gets no normals (the mesh keys `smooth`, `crease_angle` then decide). Vertices are split only where a
 position carries several uvs or normals. See docs/formats.md ("OBJ + MTL") for everything that is read.
@@ -22,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import LumosError
-from ..mesh import triangulate, vertex_normals
+from ..mesh import triangulate, vertex_normals, weld_ids
 from .imported import ImportedModel
 from .mtl import UNDEFINED_MATERIAL, find_file, read_mtl
 from .text import logical_lines
@@ -286,14 +287,17 @@ def _corner_normals(p: _Parsed, positions, normals, corner_v, corner_vn, corner_
     """
     group = np.asarray(p.face_group, dtype=np.int64)[corner_face]
     nv = len(positions)
-    # One key per (group, vertex) for smooth corners, per (face, vertex) for flat ones.
-    key = np.where(group > 0, group * nv + corner_v, -(corner_face * nv + corner_v) - 1)
+    # One key per (group, position) for smooth corners, per (face, vertex) for flat ones: a position the file
+    # repeats (a seam between patches) is one vertex of its smoothing group (`weld_ids`)
+    welded = weld_ids(positions)[corner_v]
+    key = np.where(group > 0, group * nv + welded, -(corner_face * nv + corner_v) - 1)
     unique_keys, key_id = np.unique(key, return_inverse=True)
     key_vertex = np.empty(len(unique_keys), dtype=np.int64)
     key_vertex[key_id] = corner_v
     scale = max(float(np.abs(positions).max()), 1e-300)
     with np.errstate(all="ignore"):
-        _, _, computed, _ = vertex_normals(positions[key_vertex] / scale, key_id[triangles], weighting="angle")
+        _, _, computed, _ = vertex_normals(positions[key_vertex] / scale, key_id[triangles], weighting="angle",
+                                           weld=False)  # the keys already weld, and keep the groups apart
 
     length = np.linalg.norm(normals, axis=1)
     usable = np.zeros(len(corner_vn), dtype=bool)

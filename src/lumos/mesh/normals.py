@@ -27,6 +27,14 @@ _COS_SLACK = 1e-12
 _PAIR_CHUNK = 1 << 23
 #: Normal of a vertex that no valid face touches.
 _FALLBACK_NORMAL = (0.0, 0.0, 1.0)
+#: Distinct vertices closer than this fraction of the mesh's bounding-box diagonal are one position for the
+#: normals (`weld_ids`): a file that repeats a vertex along a seam (the Utah teapot's patch borders) means one
+#: surface, not two.
+WELD_TOLERANCE = 1e-6
+#: Across welded vertices (the file gave them as distinct) faces share a normal only within this angle, even
+#: when the crease angle is wider: a seam of a smooth surface is nearly flat, while a cube given with a vertex per
+#: face corner is meant faceted.
+WELD_CREASE = 60.0
 
 
 def face_normals(vertices, faces) -> tuple[np.ndarray, np.ndarray]:
@@ -41,7 +49,23 @@ def face_normals(vertices, faces) -> tuple[np.ndarray, np.ndarray]:
     return _normalize_cross(cross)
 
 
-def vertex_normals(vertices, faces, weighting: str = "angle", crease_angle: float = 180.0):
+def weld_ids(vertices, tolerance: float = WELD_TOLERANCE) -> np.ndarray:
+    """int64 (n,): for each vertex, the index of the first vertex at (nearly) the same position, positions
+    snapped to a grid of `tolerance` × the bounding-box diagonal (as trimesh's merge does: two points either
+    side of a grid line stay apart, which a file's repeated vertices, written with the same digits, never are)."""
+    vertices = np.asarray(vertices, dtype=np.float64)
+    if len(vertices) == 0:
+        return np.zeros(0, dtype=np.int64)
+    finite = np.all(np.isfinite(vertices), axis=1)
+    span = np.ptp(vertices[finite], axis=0) if finite.any() else np.zeros(3)
+    step = max(float(np.linalg.norm(span)) * tolerance, 1e-300)
+    keys = np.where(finite[:, None], np.round(vertices / step), np.nan)
+    keys[~finite] = np.arange((~finite).sum())[:, None] + 0.5  # never weld a non-finite vertex
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    return first[inverse.ravel()].astype(np.int64)
+
+
+def vertex_normals(vertices, faces, weighting: str = "angle", crease_angle: float = 180.0, weld: bool = True):
     """Per-vertex unit normals averaged from the faces around each vertex, split at creases.
 
     vertices:     float (n, 3) positions.
@@ -52,6 +76,11 @@ def vertex_normals(vertices, faces, weighting: str = "angle", crease_angle: floa
                   share that vertex's normal: each corner averages only the faces within the crease angle of
                   its own face, and corners that end up with different normals get different vertices.
                   180 shares everything (no splitting).
+    weld:         distinct vertices at the same position (`weld_ids`) share normals too, as if the file had
+                  shared them; a mesh that repeats positions is then split at the smaller of the crease angle
+                  and WELD_CREASE (60°), so the seams of a smooth surface given with repeated vertices vanish
+                  and a cube given with a vertex per face corner stays faceted. A mesh with no repeated
+                  positions is not affected.
 
     Returns (vertices2 float64 (n2, 3), faces2 int64 (m, 3), normals2 float64 (n2, 3), source int64 (n2,)):
     the first n output vertices are the input vertices in order, split copies follow; `source[i]` is the input
@@ -66,6 +95,10 @@ def vertex_normals(vertices, faces, weighting: str = "angle", crease_angle: floa
         raise ValueError(f"crease_angle must be in [0, 180] degrees, got {crease_angle!r}")
     vertices, faces = _check_mesh(vertices, faces)
     n = len(vertices)
+    if weld and len(faces):
+        ids = weld_ids(vertices)
+        if np.any(ids[faces] != faces):
+            return _welded_normals(vertices, faces, ids, weighting, min(crease, WELD_CREASE))
 
     # Stage 1: face normals and the weight of each face at each of its three corners.
     cross = _face_cross(vertices, faces)
@@ -100,6 +133,26 @@ def vertex_normals(vertices, faces, weighting: str = "angle", crease_angle: floa
     # Stage 5: one output vertex per distinct (vertex, normal); the first keeps the input index.
     return _split_vertices(vertices, faces, normals_v, corner_id, corner_vertex[corner_id], corner_normals,
                            rep, leader)
+
+
+def _welded_normals(vertices, faces, ids, weighting, crease):
+    """`vertex_normals` over the mesh with repeated positions merged (`ids`), handed back in the input's
+    vertices: each input vertex keeps its index with the normal of its first corner, and a copy follows for
+    each other normal its corners took."""
+    n = len(vertices)
+    _, faces_w, normals_w, _ = vertex_normals(vertices, ids[faces], weighting, crease, weld=False)
+    corner_v, corner_o = faces.ravel(), faces_w.ravel()
+    pairs, first, pair_of = np.unique(corner_v * (len(normals_w) + 1) + corner_o, return_index=True,
+                                      return_inverse=True)
+    pair_v, pair_o = corner_v[first], corner_o[first]
+    lead = np.r_[True, pair_v[1:] != pair_v[:-1]]  # pairs are sorted by vertex: the first of each keeps it
+    index = np.where(lead, pair_v, 0)
+    index[~lead] = n + np.arange((~lead).sum())
+    normals2 = np.empty((n + (~lead).sum(), 3))
+    normals2[:n] = _FALLBACK_NORMAL  # a vertex no face uses
+    normals2[index] = normals_w[pair_o]
+    source = np.r_[np.arange(n, dtype=np.int64), pair_v[~lead]]
+    return vertices[source], index[pair_of.ravel()].reshape(-1, 3), normals2, source
 
 
 def _check_mesh(vertices, faces) -> tuple[np.ndarray, np.ndarray]:

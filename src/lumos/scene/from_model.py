@@ -4,21 +4,30 @@
 
 Pure Python (NumPy for the vertex bounds; never Numba). The scene built for a bare model file:
 
-- **camera**: the file's first camera if it has one; otherwise a front view from +z looking towards −z with y up
-  (the OBJ and glTF convention), vertical fov 40°, at the distance where the model's bounding sphere (centred
-  on its bounding box) fills the frame's height with a 10% margin (`MARGIN`). Wider-than-tall images show all of
-  it; a portrait image crops the sides. An open model whose faces mostly face one way (`view_direction`: a
-  floor, a wall, a backdrop or a Cornell box open on one side) is looked at from the side its faces show: from
-  −z when they face −z, and from the front raised or swung by 40° (`TILT`) when they face up, down or sideways,
-  so that a floor is not seen edge-on and a backdrop not from behind.
-- **lights**: the file's own lights if it has them; otherwise, unless the model's own emissive materials are
-  meant to light it, a three-point set-up around the bounding sphere (`three_point_lights`): a key light
-  up-left-front, a weaker fill from the right, a rim light from behind and above, point lights without fall-off,
-  so a white Lambertian surface facing the key reads about 0.65 and none goes over 1 (DESIGN.md §3 units).
-- **method**: `whitted` (shadows, mirrors and glass: MTL illum 3–7) at 4 spp; `path` at 64 spp when the model
-  has no lights of its own and some of its materials emit (MTL `Ke`, glTF `emissiveFactor`): the McGuire
-  Cornell boxes are lit by their ceiling light only, which only the path tracer samples as a light.
-- **no ground**, a dark grey background (black when the model lights itself), ambient 0.05.
+- **camera**: the file's first camera if it has one (unless `--view` or `--up` is given); otherwise a camera
+  framing the model, vertical fov 40°, at the distance where its bounding sphere (centred on its bounding box)
+  fills the frame's height with a 10% margin (`MARGIN`):
+  - **up**: +y for glTF (its specification); for OBJ, PLY, STL and OFF, which carry no up axis, +z when the
+    bounds are at least 1.4× taller along z than along y (`Z_UP_RATIO`: a bottle or a figure modelled z-up)
+    and not flat along y (a floor), else +y (`up_axis`);
+  - **front**: of the four horizontal sides, the one the most faces face (`front_direction`; counting faces,
+    not area: a scan's face and hands are finely meshed), +z (−y for z-up) unless another side has 10% more;
+  - **view**: from the front, swung 30° to the model's left and raised 25° (`three-quarter`, a product shot),
+    or the `--view` asked for (front, back, left, right, top). An open model whose faces mostly face one way
+    (`view_direction`: a floor, a wall, a backdrop) is looked at from the side its faces show instead: from
+    behind when they face back, and from the front raised or swung by 40° (`TILT`) when they face up, down or
+    sideways, so that a floor is not seen edge-on and a backdrop not from behind.
+- **lights**: the file's own lights if it has them; otherwise a three-point set-up around the bounding sphere,
+  placed about the camera's view (`three_point_lights`): a key light up-left-front, a weaker fill from the right, a rim light from behind and
+  above, point lights without fall-off, so a white Lambertian surface facing the key reads about 0.65 and none
+  goes over 1 (DESIGN.md §3 units). A model's emissive materials add to them (they used to replace them, and
+  the DamagedHelmet showed only its glowing parts), except in a model seen from inside (a Cornell box with
+  its lamp), which its own light lights. A model seen from inside gets its lights close to the view's axis
+  (`INSIDE_LIGHTS`), so that they shine in through the opening the camera looks through.
+- **method**: `whitted` (shadows, mirrors and glass: MTL illum 3–7) at 4 spp; `path` at 64 spp (`PATH_SPP`) when
+  some of its materials emit (MTL `Ke`, glTF `emissiveFactor`), since only the path tracer samples them as
+  lights. `--method path` on a model file also gets 64 spp unless `--spp` says otherwise (`api.resolve_settings`).
+- **no ground**, a dark grey background, ambient 0.05.
 """
 
 from __future__ import annotations
@@ -36,6 +45,9 @@ FOV = 40.0
 MARGIN = 1.1
 AMBIENT = 0.05
 BACKGROUND = 0.05
+#: Samples per pixel of `path` for a model file (its method when the model emits light, or `--method path`):
+#: enough that a teapot or a bunny under the three-point lights is not speckled.
+PATH_SPP = 64
 
 
 # ----------------------------------------------------------------------------------------------- geometry
@@ -97,27 +109,54 @@ def bounding_sphere(objects: list[dict]) -> tuple[np.ndarray, float]:
 
 
 def framing_camera(center: np.ndarray, radius: float, fov: float = FOV, margin: float = MARGIN,
-                   direction=(0.0, 0.0, 1.0)) -> dict:
-    """A perspective camera on the `direction` side of `center` (default +z: looking along −z), y up, at the
+                   direction=(0.0, 0.0, 1.0), up=(0.0, 1.0, 0.0)) -> dict:
+    """A perspective camera on the `direction` side of `center` (default +z: looking along −z), `up` up, at the
     distance where a sphere of `radius` spans 1/`margin` of the vertical field of view `fov` (degrees)."""
     distance = margin * radius / math.sin(math.radians(fov) / 2)
     position = center + distance * np.asarray(direction, dtype=np.float64)
-    return {"type": "perspective", "position": _vec(position), "look_at": _vec(center), "up": [0.0, 1.0, 0.0],
-            "fov": fov}
+    return {"type": "perspective", "position": _vec(position), "look_at": _vec(center), "up": _vec(up), "fov": fov}
 
 
 #: How far (degrees) the front view is raised or swung towards a model whose faces mostly face up, down or
 #: sideways; and how one-sided (|mean unit normal|, 0 for a closed surface) a model must be to be turned to.
 TILT = 40.0
 ONE_SIDED = 0.3
+#: The views `--view` names; `three-quarter` is the default for a model that is not one-sided.
+VIEWS = ("three-quarter", "front", "back", "left", "right", "top")
+#: The three-quarter view: swung this far (degrees) round the up axis from the front, towards the model's
+#: left (the viewer's right), and raised this far above the horizon: a product shot.
+SWING = 30.0
+RAISE = 25.0
+#: OBJ, PLY, STL and OFF carry no up axis: a model is taken as z-up when its bounds are at least this much taller
+#: along z than along y (a bottle or a figure modelled z-up); otherwise y-up, the OBJ and glTF convention.
+Z_UP_RATIO = 1.4
+#: A side of the model is its front when more faces face it than face any other side by this share; on a tie
+#: (a box, a sphere) the front is the first of +z, −z, +x, −x (y-up; −y, +y, +x, −x for z-up).
+FRONT_MARGIN = 0.1
 
 
-def view_direction(objects: list[dict]) -> np.ndarray:
-    """Unit (3,) direction from the model's centre to the framing camera: +z, unless the area-weighted mean of
-    the meshes' face normals (their winding, counter-clockwise as the file gives it) is at least ONE_SIDED long
-    (a closed surface's is 0): then from the side the faces show, −z when they face mostly −z, else the front
-    view raised (faces up), lowered (faces down) or swung left or right by TILT degrees."""
-    total, area = np.zeros(3), 0.0
+def up_axis(objects: list[dict], source=None) -> str:
+    """"y" or "z": glTF is +y by its specification; any other format, "z" when the model's bounds are at least
+    Z_UP_RATIO times taller along z than along y, and not flat along y (a floor in the xz plane)."""
+    if source is not None and str(source).lower().endswith((".gltf", ".glb")):
+        return "y"
+    lo, hi = model_bounds(objects)
+    extent = hi - lo
+    flat = extent[1] <= 0.05 * extent.max()  # a floor in the xz plane: y-up's ground, not a z-up wall
+    return "z" if extent[2] > Z_UP_RATIO * extent[1] and not flat else "y"
+
+
+def _frame(up: str) -> np.ndarray:
+    """(3, 3) rotation from world to the viewing frame, where up is +y and the first front candidate +z."""
+    if up == "z":
+        return np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # z → y, −y → +z
+    return np.eye(3)
+
+
+def _triangles(objects: list[dict]) -> np.ndarray:
+    """(m, 3, 3) float64: the corners of every triangle of the meshes, in world space, as the file winds them
+    (counter-clockwise about the front); polygon faces (which the scene model triangulates later) are skipped."""
+    out = []
     for obj in objects:
         if obj.get("type") != "mesh" or obj.get("vertices") is None or obj.get("faces") is None:
             continue
@@ -127,25 +166,96 @@ def view_direction(objects: list[dict]) -> np.ndarray:
             v = v @ m[:3, :3].T + m[:3, 3]
         try:
             f = np.asarray(obj["faces"], dtype=np.int64).reshape(-1, 3)
-        except ValueError:  # polygons: the scene model triangulates them; count only the framing's triangles
+        except ValueError:
             continue
         if not len(f) or f.min() < 0 or f.max() >= len(v):
             continue
-        n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # 2 × area × unit normal
-        n = n[np.all(np.isfinite(n), axis=1)]
-        total += n.sum(axis=0)
-        area += float(np.linalg.norm(n, axis=1).sum())
+        t = v[f]
+        out.append(t[np.all(np.isfinite(t), axis=(1, 2))])
+    return np.concatenate(out) if out else np.zeros((0, 3, 3))
+
+
+def _face_normals(objects: list[dict]) -> np.ndarray:
+    """(m, 3) float64: 2 × area × unit normal of every triangle of the meshes, in world space."""
+    t = _triangles(objects)
+    return np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+
+
+def view_direction(objects: list[dict], up: str = "y") -> np.ndarray | None:
+    """A one-sided model's view, unit (3,) from its centre to the camera, or None for a model that is not one-sided.
+    One-sided: the area-weighted mean of the face normals is at least ONE_SIDED long (a closed surface's is 0);
+    then the view is from the side the faces show: from behind (−z for y-up) when they face mostly back, else
+    the front view raised (faces up), lowered (faces down) or swung left or right by TILT degrees."""
+    n = _face_normals(objects) @ _frame(up).T
+    area = float(np.linalg.norm(n, axis=1).sum())
+    total = n.sum(axis=0)
     if not area > 0 or np.linalg.norm(total) < ONE_SIDED * area:
-        return np.array([0.0, 0.0, 1.0])
+        return None
     mean = total / area
     axis = int(np.argmax(np.abs(mean)))
     side = 1.0 if mean[axis] > 0 else -1.0
     if axis == 2:
-        return np.array([0.0, 0.0, side])
-    tilt = math.radians(TILT)
-    out = np.array([0.0, 0.0, math.cos(tilt)])
-    out[axis] = side * math.sin(tilt)
-    return out
+        out = np.array([0.0, 0.0, side])
+    else:
+        tilt = math.radians(TILT)
+        out = np.array([0.0, 0.0, math.cos(tilt)])
+        out[axis] = side * math.sin(tilt)
+    return _frame(up).T @ out
+
+
+def front_direction(objects: list[dict], up: str = "y") -> np.ndarray:
+    """Unit (3,) world direction of the model's front: of the four horizontal sides, the one the most faces face
+    (unit normal within 60° of it), counting faces, not area (a scan's face, hands and feet are finely meshed);
+    a side must beat the first candidate by FRONT_MARGIN to take its place."""
+    n = _face_normals(objects) @ _frame(up).T
+    length = np.linalg.norm(n, axis=1)
+    unit = n[length > 0] / length[length > 0, None]
+    candidates = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+    counts = (unit @ candidates.T > 0.5).sum(axis=0)
+    best = 0
+    for i in range(1, 4):
+        if counts[i] > counts[best] and counts[i] > (1.0 + FRONT_MARGIN) * counts[0]:
+            best = i
+    return _frame(up).T @ candidates[best]
+
+
+def faces_inward(objects: list[dict]) -> bool:
+    """Whether the model is mostly seen from inside (a room, a Cornell box open on one side): its faces, weighted
+    by area, point towards its centre rather than away from it. Such a model is looked into straight from its
+    front, where a three-quarter view would show the outside of a wall."""
+    t = _triangles(objects)
+    if not len(t):
+        return False
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    lo, hi = model_bounds(objects)
+    outward = np.einsum("ij,ij->i", n, t.mean(axis=1) - (lo + hi) / 2)
+    return float(outward.sum()) < 0.0
+
+
+def camera_direction(objects: list[dict], view: str | None = None, up: str = "y") -> tuple[np.ndarray, np.ndarray]:
+    """(direction from the model's centre to the camera, the camera's up), both unit (3,) world vectors, for
+    `view` (one of VIEWS; None: a one-sided model's own view, else three-quarter)."""
+    u = _frame(up).T @ np.array([0.0, 1.0, 0.0])
+    if view is None:
+        own = view_direction(objects, up)
+        if own is not None:
+            return own, u
+        view = "front" if faces_inward(objects) else "three-quarter"
+    f = front_direction(objects, up)
+    right = np.cross(u, f)  # the viewer's right, looking at the front
+    if view == "front":
+        return f, u
+    if view == "back":
+        return -f, u
+    if view == "left":  # the model's left: the viewer's right
+        return right, u
+    if view == "right":
+        return -right, u
+    if view == "top":
+        return u, -f  # looking down, the front at the bottom of the image
+    swing, rise = math.radians(SWING), math.radians(RAISE)
+    d = math.cos(rise) * (math.cos(swing) * f + math.sin(swing) * right) + math.sin(rise) * u
+    return d / np.linalg.norm(d), u
 
 
 #: (direction from the centre, intensity) of the key, fill and rim lights of `three_point_lights`.
@@ -156,11 +266,31 @@ THREE_POINT = (
 )
 
 
-def three_point_lights(center: np.ndarray, radius: float) -> list[dict]:
-    """Key, fill and rim point lights (no fall-off) at 4 bounding radii from `center`."""
+#: The same lights for a model seen from inside (`faces_inward`: a room, a box open on one side): close to the
+#: view's axis, so that their light comes in through the opening the camera looks through (the wide key light
+#: of THREE_POINT lit the outside of a Cornell box's wall), and no rim light (it would be behind the back wall).
+INSIDE_LIGHTS = (
+    ((-0.25, 0.3, 1.0), 0.65),
+    ((0.3, 0.05, 1.0), 0.25),
+)
+
+
+def three_point_lights(center: np.ndarray, radius: float, camera: dict | None = None,
+                       inside: bool = False) -> list[dict]:
+    """Key, fill and rim point lights (no fall-off) at 4 bounding radii from `center`, placed about the view of
+    `camera` (a camera dict: THREE_POINT's x is the image's right, y its up, z towards the camera; without one,
+    the +z front view's: world x, y, z)."""
+    frame = np.eye(3)
+    if camera is not None and camera.get("position") is not None and camera.get("look_at") is not None:
+        back = np.subtract(camera["position"], camera["look_at"]).astype(np.float64)
+        right = np.cross(np.asarray(camera.get("up", (0.0, 1.0, 0.0)), np.float64), back)
+        if np.linalg.norm(back) > 0 and np.linalg.norm(right) > 0:
+            back /= np.linalg.norm(back)
+            right /= np.linalg.norm(right)
+            frame = np.stack([right, np.cross(back, right), back])
     lights = []
-    for direction, intensity in THREE_POINT:
-        d = np.asarray(direction) / np.linalg.norm(direction)
+    for direction, intensity in INSIDE_LIGHTS if inside else THREE_POINT:
+        d = np.asarray(direction) / np.linalg.norm(direction) @ frame
         lights.append({"type": "point", "position": _vec(center + 4.0 * radius * d), "intensity": intensity})
     return lights
 
@@ -184,34 +314,38 @@ def emits(materials: dict[str, dict], objects: list[dict]) -> bool:
     return False
 
 
-def scene_from_model(model) -> tuple[dict, str]:
-    """(scene dict, a line saying what was made up) for an `ImportedModel` rendered on its own."""
+def scene_from_model(model, view: str | None = None, up: str | None = None) -> tuple[dict, str]:
+    """(scene dict, a line saying what was made up) for an `ImportedModel` rendered on its own; `view` (one of
+    VIEWS) and `up` ("y" or "z") override the file's camera and the up-axis heuristic."""
     materials, objects = dict(model.materials), [dict(o) for o in model.objects]
     center, radius = bounding_sphere(objects)
     about = []
-    if model.cameras:
+    if model.cameras and view is None and up is None:
         camera = dict(model.cameras[0])
         about.append("the file's camera")
     else:
-        camera = framing_camera(center, radius, direction=view_direction(objects))
-        about.append("a front camera framing the bounds")
-    self_lit = not model.lights and emits(materials, objects)
+        up = up or up_axis(objects, model.source)
+        direction, camera_up = camera_direction(objects, view, up)
+        camera = framing_camera(center, radius, direction=direction, up=camera_up)
+        about.append(f"a {view or 'model-chosen'} view framing the bounds, {up} up")
+    self_lit = emits(materials, objects)
+    inside = "file's camera" not in about[0] and view in (None, "front") and faces_inward(objects)
     if model.lights:
         lights = [dict(light) for light in model.lights]
         about.append(f"the file's {len(lights)} light{'s' if len(lights) > 1 else ''}")
-    elif self_lit:
+    elif self_lit and inside:
         lights = []
-        about.append("no lights (its emissive materials light it)")
+        about.append("no lights (its emissive materials light its inside)")
     else:
-        lights = three_point_lights(center, radius)
-        about.append("three-point lights")
-    render = {"method": "path", "spp": 64} if self_lit else {"method": "whitted", "spp": 4}
+        lights = three_point_lights(center, radius, camera, inside)
+        about.append("three-point lights" + (" (its emissive materials add to them)" if self_lit else ""))
+    render = {"method": "path", "spp": PATH_SPP} if self_lit else {"method": "whitted", "spp": 4}
     about.append(f"method {render['method']}")
     scene = {
         "camera": camera,
         "render": render,
         "ambient": AMBIENT,
-        "background": 0.0 if self_lit else BACKGROUND,
+        "background": BACKGROUND,
         "lights": lights,
         "materials": materials,
         "objects": objects,

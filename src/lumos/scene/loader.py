@@ -42,12 +42,19 @@ _TOP_KEYS = ", ".join(Scene.model_fields)
 # ------------------------------------------------------------------------------------------------ entry point
 
 
-def load_scene(source: str | os.PathLike | dict) -> Scene:
-    """Load, validate and complete a scene from a `.yaml`/`.yml`/`.json` file or a dict.
+def load_scene(source: str | os.PathLike | dict, view: Optional[str] = None, up: Optional[str] = None) -> Scene:
+    """Load, validate and complete a scene from a `.yaml`/`.yml`/`.json` file, a dict, or a model file (`.obj`,
+    `.gltf`, `.glb`, `.ply`, `.stl`, `.off`: the model with a camera, lights and a method made up for it).
 
-    Mesh files are read (relative to the scene file's folder, or to the current folder for a dict).
+    Mesh files are read (relative to the scene file's folder, or to the current folder for a dict). For a model
+    file, `view` (three-quarter, front, back, left, right or top) and `up` ("y" or "z") choose the made-up
+    camera; for a scene, which has its own camera, they are refused.
     Raises `SceneError` (a `LumosError`) with a one-line message for any bad input.
     """
+    is_model = isinstance(source, (str, os.PathLike)) and Path(source).suffix.lower() in MODEL_FORMATS
+    if (view is not None or up is not None) and not is_model:
+        raise SceneError(f"{os.fspath(source) if isinstance(source, (str, os.PathLike)) else 'scene'}: --view and "
+                         f"--up frame a model file; a scene has its own camera")
     if isinstance(source, Scene):
         return _completed(source)
     if isinstance(source, (dict, list)):
@@ -55,7 +62,7 @@ def load_scene(source: str | os.PathLike | dict) -> Scene:
     elif isinstance(source, (str, os.PathLike)):
         name, path = os.fspath(source), Path(source).expanduser()
         if path.suffix.lower() in MODEL_FORMATS:
-            return _model_scene(path, name)
+            return _model_scene(path, name, view, up)
         data, lines = _read_file(path, name)
     else:
         raise SceneError(f"load_scene() takes a file path or a dict, not {type(source).__name__}")
@@ -314,7 +321,7 @@ def _mesh_reason(message: str, path: Path) -> str:
 
 
 def _import(path: Path, shown: str):
-    """`import_model(path)` with its warnings said, each prefixed by nothing (they name their file and line)."""
+    """`import_model(path)` with its warnings said, each distinct one once (they name their file and line)."""
     import warnings
 
     from ..errors import LumosWarning
@@ -326,15 +333,20 @@ def _import(path: Path, shown: str):
         raise
     except Exception as exc:  # a corrupt file can upset a parser in any way; it is still bad input
         raise LumosError(f"{shown}: {type(exc).__name__}: {one_line(str(exc))}") from None
-    for text in model.warnings:
+    for text in model.warnings_once():  # each distinct problem once, with a count
         warnings.warn(LumosWarning(one_line(text)))
     return model
 
 
-def _model_scene(path: Path, name: str) -> Scene:
+def _model_scene(path: Path, name: str, view: Optional[str] = None, up: Optional[str] = None) -> Scene:
     """The scene `lumos render model.obj` renders: the model with a camera, lights and a method made up for it
     (`lumos.scene.from_model`)."""
-    from .from_model import scene_from_model
+    from .from_model import VIEWS, scene_from_model
+
+    if view is not None and view not in VIEWS:
+        raise SceneError(f"--view: unknown view {view!r} (choose from {', '.join(VIEWS)})")
+    if up is not None and up not in ("y", "z"):
+        raise SceneError(f"--up: expected y or z, got {up!r}")
 
     if path.is_dir():
         raise SceneError(f"{name}: is a folder, not a model file")
@@ -342,7 +354,7 @@ def _model_scene(path: Path, name: str) -> Scene:
         model = _import(path, name)
     except LumosError as exc:
         raise SceneError(one_line(str(exc))) from None
-    data, about = scene_from_model(model)
+    data, about = scene_from_model(model, view, up)
     try:
         scene = Scene.model_validate(data)
     except ValidationError as exc:
@@ -352,6 +364,7 @@ def _model_scene(path: Path, name: str) -> Scene:
     scene._included = [f"{path.name}: {n} object{'s' if n != 1 else ''}, {len(model.materials)} materials; "
                        f"made up: {about}"]
     scene._source = path
+    scene._made_for_model = True
     return scene
 
 

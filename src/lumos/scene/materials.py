@@ -10,7 +10,7 @@ from typing import Annotated, Any, ClassVar, Literal, Optional, Union
 
 from pydantic import Discriminator, Field, PrivateAttr, Tag, field_validator, model_validator
 
-from .types import Color, Finite, NonNegative, Positive, StrictModel
+from .types import Color, Finite, NonNegative, Positive, ShareColor, StrictModel
 
 
 class Material(StrictModel):
@@ -20,8 +20,9 @@ class Material(StrictModel):
     kd: Color = (0.0, 0.0, 0.0)
     ks: Color = (0.0, 0.0, 0.0)
     shininess: NonNegative = 1.0
-    kr: Color = (0.0, 0.0, 0.0)
-    kt: Color = (0.0, 0.0, 0.0)
+    #: the shares of light reflected and transmitted (whitted's recursion; path's specular lobes): in [0, 1]
+    kr: ShareColor = (0.0, 0.0, 0.0)
+    kt: ShareColor = (0.0, 0.0, 0.0)
     ior: Positive = 1.0
     emission: Color = (0.0, 0.0, 0.0)
     #: whitted: weight reflection and transmission by Schlick's approximation of the Fresnel factor
@@ -103,6 +104,9 @@ class Texture(_UVMap):
     def _check(self):
         if not self.apply_to:
             raise ValueError("apply_to must name at least one of ka, kd, ks, kr, emission, opacity")
+        if "kr" in self.apply_to and self.type != "image" and max(max(c) for c in self.colors) > 1.0:
+            raise ValueError("colors: a texture applied to kr gives a share of light reflected: each channel must "
+                             "be in [0, 1]")
         return self
 
 

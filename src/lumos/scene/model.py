@@ -123,6 +123,8 @@ class Scene(StrictModel):
     _source: Optional[Path] = PrivateAttr(default=None)
     #: what the loader included from model files (`type: model`, a camera's `file`), one line each, for `lumos info`
     _included: list = PrivateAttr(default_factory=list)
+    #: the scene was made up for a bare model file (`lumos render model.obj`): its camera, lights and method
+    _made_for_model: bool = PrivateAttr(default=False)
 
     @model_validator(mode="after")
     def _check_material_names(self):
@@ -143,6 +145,11 @@ class Scene(StrictModel):
     def source(self) -> Optional[Path]:
         """The file the scene was loaded from (None for a dict)."""
         return self._source
+
+    @property
+    def made_for_model(self) -> bool:
+        """Whether the scene was made up for a bare model file (its camera, lights and method chosen by lumos)."""
+        return self._made_for_model
 
 
 class UnknownMaterial(ValueError):

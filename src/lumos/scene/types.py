@@ -47,6 +47,11 @@ Direction = Annotated[tuple[Finite, Finite, Finite], BeforeValidator(_list_to_tu
 #: stay inside the float32 film (3.4e38) instead of turning into infinity
 Channel = Annotated[float, Field(ge=0, le=1e30, allow_inf_nan=False)]
 Color = Annotated[tuple[Channel, Channel, Channel], BeforeValidator(_scalar_to_rgb)]
+#: A share of light handed on per RGB channel (a material's kr and kt): in [0, 1]. A larger one is no physical
+#: surface, and compounded through a recursion of reflections (1e18 after three bounces of kr = 1e6) it turned
+#: pixels into infinity.
+Share = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
+ShareColor = Annotated[tuple[Share, Share, Share], BeforeValidator(_scalar_to_rgb)]
 
 
 def norm(v) -> float:
