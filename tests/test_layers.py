@@ -24,7 +24,7 @@ LAYERS = (
     ("compile: a scene to flat arrays, BVH, polygons, patches", ("compile",)),
     ("the rendering methods and radiosity's solver", ("methods", "radiosity", "denoise")),
     ("the API: render and its Image, ray queries, progress, compile-time messages",
-     ("api", "image", "queries", "jitwatch", "progress")),
+     ("api", "image", "queries", "interference", "jitwatch", "progress")),
     ("tools on top of the API and the command line",
      ("explaining", "sheet", "sheet_drawing", "metrics", "warmup", "cli", "__main__", "__init__")),
 )

@@ -17,13 +17,13 @@ exactly, as every ray method sees them, not tessellated. See docs/queries.md.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple, Optional, Union
+from typing import NamedTuple, Union
 
 import numpy as np
 
 from .errors import LumosError
+from .interference import Interference, measure_interference
 
 _SCENE_FILES = (".yaml", ".yml", ".json")
 #: objects whose inside is defined (closed solids)
@@ -64,20 +64,6 @@ class Segments(NamedTuple):
     object_id: np.ndarray  # int64 (k,)
     t_in: np.ndarray  # float64 (k,)
     t_out: np.ndarray  # float64 (k,)
-
-
-@dataclass
-class Interference:
-    """What `RayCaster.interference` found (docs/queries.md: accuracy)."""
-
-    intersects: bool  # the solids share volume (or, with a tolerance, come closer than it along x, y or z)
-    volume: float  # estimated volume of their intersection
-    volume_error: float  # standard error of `volume`
-    points: np.ndarray  # float64 (k, 3): sample points inside both (empty when they do not intersect)
-    spacing: float  # the ray grid's spacing: overlaps thinner than about this may be missed
-    min_distance: Optional[float]  # not intersecting: the least distance between sampled surface points
-    # (an upper bound of the true distance, within about `spacing` of it); 0 when they intersect; None when
-    # the solids' boxes are too far apart for any ray to cross both or scipy is missing
 
 
 def _load(scene):
@@ -358,7 +344,11 @@ class RayCaster:
             raise LumosError(f"interference: tolerance must be a finite number >= 0, got {tolerance}")
         if not isinstance(resolution, (int, np.integer)) or resolution < 2:
             raise LumosError(f"interference: resolution must be a whole number >= 2, got {resolution!r}")
-        return _interference(self, ia, ib, tolerance, int(resolution), seed)
+        sel = np.zeros(len(self.names), bool)
+        sel[[ia, ib]] = True
+        return measure_interference(
+            lambda o, d: self._segments(o, d, np.full(len(o), -np.inf), np.full(len(o), np.inf), sel),
+            self._object_bounds[ia], self._object_bounds[ib], ia, ib, tolerance, int(resolution), seed)
 
     def camera_rays(self, x, y, width=None, height=None):
         """(origins, directions) float64 (n, 3) of the camera rays through pixel centres (x, y) (numbers or
@@ -508,83 +498,3 @@ def _integrate(f, o, d, t0, t1, k):
     if not np.isfinite(values).all():
         raise LumosError("path_length: density(points) returned a value that is not finite")
     return (values.reshape(-1, k) * w[None, :]).sum(axis=1) * half
-
-
-def _interference(rc: RayCaster, ia: int, ib: int, tol: float, res: int, seed: int) -> Interference:
-    ba, bb = rc._object_bounds[ia], rc._object_bounds[ib]
-    if not (np.isfinite(ba).all() and np.isfinite(bb).all()):
-        raise LumosError("interference: both objects must be bounded")
-    # the overlap of the two boxes; on an axis where they are apart, the gap between them (rays along that axis
-    # then cross both solids' facing surfaces: the clearance estimate)
-    lo, hi = np.maximum(ba[0], bb[0]), np.minimum(ba[1], bb[1])
-    lo, hi = np.minimum(lo, hi) - tol, np.maximum(lo, hi) + tol
-    sel = np.zeros(len(rc.names), bool)
-    sel[[ia, ib]] = True
-    rng = np.random.default_rng(seed)
-    estimates, points, surf_a, surf_b = [], [], [], []
-    spacing, touch = 0.0, False
-    for axis in range(3):
-        u, v = [k for k in range(3) if k != axis]
-        size_u, size_v = hi[u] - lo[u], hi[v] - lo[v]
-        spacing = max(spacing, size_u / res, size_v / res)
-        gi, gj = (g.ravel() for g in np.meshgrid(np.arange(res), np.arange(res), indexing="ij"))
-        o = np.zeros((res * res, 3))
-        o[:, u] = lo[u] + (gi + rng.random(gi.size)) * size_u / res  # one jittered ray per cell: unbiased
-        o[:, v] = lo[v] + (gj + rng.random(gj.size)) * size_v / res
-        o[:, axis] = lo[axis]
-        d = np.zeros_like(o)
-        d[:, axis] = 1.0
-        seg = rc._segments(o, d, np.full(len(o), -np.inf), np.full(len(o), np.inf), sel)
-        overlap, (rays, mids), _ = _overlaps(seg, ia, ib, len(o), 0.0)
-        # four interleaved sub-grids (every other cell) give four independent estimates from this axis
-        group = (gi % 2) * 2 + (gj % 2)
-        cell = size_u * size_v / (res * res)
-        estimates += [4.0 * cell * overlap[group == g].sum() for g in range(4)]
-        points.append(o[rays] + mids[:, None] * d[rays])
-        if tol > 0.0:
-            touch = touch or _overlaps(seg, ia, ib, len(o), tol)[2]
-        for obj, out in ((ia, surf_a), (ib, surf_b)):
-            m = seg.object_id == obj
-            ends = np.concatenate([seg.t_in[m], seg.t_out[m]])
-            r = np.concatenate([seg.ray[m], seg.ray[m]])
-            out.append(o[r] + ends[:, None] * d[r])
-    estimates = np.array(estimates)
-    volume = float(estimates.mean())
-    error = float(estimates.std(ddof=1) / np.sqrt(len(estimates)))
-    pts = np.concatenate(points)
-    min_distance = 0.0 if len(pts) else _min_distance(np.concatenate(surf_a), np.concatenate(surf_b))
-    return Interference(bool(len(pts)) or touch, volume, error, pts, float(spacing), min_distance)
-
-
-def _overlaps(seg: Segments, ia, ib, n, tol):
-    """Per ray, the total length inside both a and b ((n,) float64); the (ray, t) of each overlap's middle; and
-    with tol > 0 whether any pieces of a and b, each grown by tol/2 at both ends, overlap."""
-    ma, mb = seg.object_id == ia, seg.object_id == ib
-    ra, a0, a1 = seg.ray[ma], seg.t_in[ma] - tol / 2, seg.t_out[ma] + tol / 2
-    rb, b0, b1 = seg.ray[mb], seg.t_in[mb] - tol / 2, seg.t_out[mb] + tol / 2
-    # every pair of an a piece and a b piece on the same ray (few per ray)
-    order = np.argsort(rb, kind="stable")
-    rb, b0, b1 = rb[order], b0[order], b1[order]
-    start = np.searchsorted(rb, ra, "left")
-    stop = np.searchsorted(rb, ra, "right")
-    reps = stop - start
-    ia_idx = np.repeat(np.arange(len(ra)), reps)
-    ib_idx = (np.arange(reps.sum()) - np.repeat(np.cumsum(reps) - reps, reps)) + np.repeat(start, reps)
-    lo = np.maximum(a0[ia_idx], b0[ib_idx])
-    hi = np.minimum(a1[ia_idx], b1[ib_idx])
-    live = hi > lo
-    rays = ra[ia_idx][live]
-    length = np.bincount(rays, weights=(hi - lo)[live], minlength=n)
-    return length, (rays, 0.5 * (lo + hi)[live]), bool(live.any())
-
-
-def _min_distance(a: np.ndarray, b: np.ndarray) -> Optional[float]:
-    if not len(a) or not len(b):
-        return None
-    try:
-        from scipy.spatial import cKDTree
-    except ImportError:
-        return None
-    dist, _ = cKDTree(b).query(a, k=1)
-    return float(dist.min())
-
