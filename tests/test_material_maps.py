@@ -284,7 +284,8 @@ def test_textured_mesh_with_maps_raster_phong_equals_raycast():
     scene = {"camera": CAMERA, "ambient": 0.2, "lights": LIGHTS, "materials": {"m": material},
              "objects": [{"type": "mesh", "vertices": v, "faces": f, "normals": n, "uvs": uv, "material": "m"}]}
     W, H = 160, 120
-    ray = lumos.render(scene, method="raycast", width=W, height=H, antialias="none", aov=["object_id"])
+    ray = lumos.render(scene, method="raycast", width=W, height=H, antialias="none", mipmap=False,
+                       aov=["object_id"])
     ras = lumos.render(scene, method="raster", shading="phong", width=W, height=H, antialias="none",
                        mipmap=False, aov=["object_id"])
     agree(ras, ray)

@@ -51,7 +51,8 @@ def test_textured_smooth_mesh_raster_phong_equals_raycast(camera):
              "objects": [{"type": "mesh", "vertices": v, "faces": f, "normals": n, "uvs": uv,
                           "material": PROCEDURAL}]}
     W, H = 160, 120
-    ray = lumos.render(scene, method="raycast", width=W, height=H, antialias="none", aov=["object_id"])
+    ray = lumos.render(scene, method="raycast", width=W, height=H, antialias="none", mipmap=False,
+                       aov=["object_id"])
     ras = lumos.render(scene, method="raster", shading="phong", width=W, height=H, antialias="none",
                        mipmap=False, aov=["object_id"])
     agree(ras, ray)
@@ -75,7 +76,8 @@ def test_tessellated_sphere_with_an_image_texture_matches_raycast_of_its_polygon
     W, H = 160, 120
     ras = lumos.render(analytic, method="raster", tessellation=64, width=W, height=H, antialias="none",
                        mipmap=False, aov=["object_id"])
-    ray = lumos.render(polygons, method="raycast", width=W, height=H, antialias="none", aov=["object_id"])
+    ray = lumos.render(polygons, method="raycast", width=W, height=H, antialias="none", mipmap=False,
+                       aov=["object_id"])
     agree(ras, ray)
 
 
@@ -117,7 +119,8 @@ def test_affine_uvs_swim_under_perspective_and_correct_ones_match_raycast():
     scene = quad_scene({"ka": 1.0, "kd": 0.0, "texture": {"type": "checker", "scale": 4, "apply_to": ["ka"]}},
                        camera=camera, lights=[], ambient=1.0)
     W, H = 120, 90
-    ray = lumos.render(scene, method="raycast", width=W, height=H, antialias="none", aov=["object_id"])
+    ray = lumos.render(scene, method="raycast", width=W, height=H, antialias="none", mipmap=False,
+                       aov=["object_id"])
     correct = lumos.render(scene, method="raster", width=W, height=H, antialias="none", mipmap=False,
                            aov=["object_id"])
     affine = lumos.render(scene, method="raster", width=W, height=H, antialias="none", mipmap=False,
@@ -185,9 +188,9 @@ def test_box_filtered_checker_is_the_mean_over_the_footprint(tmp_path):
         u, v = rng.uniform(-3, 3, 2)
         du, dv = rng.uniform(0.05, 2.0, 2)
         got = T.texture_rgb_filtered(tex, row, u, v, (0, 0, 0), du, 0.0, 0.0, dv)[0]
-        # the box [u − du, u + du] × [v − dv, v + dv], integrated numerically
-        s = u + du * (2 * (np.arange(4000) + 0.5) / 4000 - 1)
-        t = v + dv * (2 * (np.arange(4000) + 0.5) / 4000 - 1)
+        # the box one footprint wide, [u − du/2, u + du/2] × [v − dv/2, v + dv/2], integrated numerically
+        s = u + 0.5 * du * (2 * (np.arange(4000) + 0.5) / 4000 - 1)
+        t = v + 0.5 * dv * (2 * (np.arange(4000) + 0.5) / 4000 - 1)
         odd_s = np.mean(np.floor(s) % 2 == 1)
         odd_t = np.mean(np.floor(t) % 2 == 1)
         white = 1.0 - (odd_s * (1 - odd_t) + odd_t * (1 - odd_s))

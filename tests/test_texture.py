@@ -249,15 +249,16 @@ def test_loaded_texels_are_linear_and_bottom_row_first(tmp_path, rng):
         "height": {"bump": {"type": "image", "file": path, "strength": 0.2}},
     }))
     info, pixels = compiled.arrays.tex_info, compiled.arrays.tex_pixels
-    assert info.shape == (2, T.TEX_SIZE) and pixels.dtype == np.float32 and pixels.shape == (30, 3)
+    # each image is followed by its mip-map levels: 5 × 3, 2 × 1, 1 × 1 texels
+    assert info.shape == (2, T.TEX_SIZE) and pixels.dtype == np.float32 and pixels.shape == (2 * 18, 3)
     colour = pixels[: 15].reshape(3, 5, 3)[::-1]
     np.testing.assert_allclose(colour, srgb_decode(values / 255.0), rtol=1e-6)
     # the sRGB curve itself (IEC 61966-2-1) at the three hand-picked channels
     np.testing.assert_allclose(colour[0, 0], [0.21586050, 10 / 255 / 12.92, 1.0], rtol=1e-6)
     # a bump map keeps the raw values: its height is their Rec. 709 luminance
-    height = pixels[15:].reshape(3, 5, 3)[::-1]
+    height = pixels[18:33].reshape(3, 5, 3)[::-1]
     np.testing.assert_allclose(height[..., 1], values @ [0.2126, 0.7152, 0.0722] / 255.0, rtol=1e-6)
-    assert info[1, T.TEX_OFFSET] == 15 and info[1, T.TEX_STRENGTH] == 0.2
+    assert info[1, T.TEX_OFFSET] == 18 and info[1, T.TEX_STRENGTH] == 0.2 and info[1, T.TEX_LEVELS] == 3
 
 
 def test_image_appears_upright_on_a_sphere(tmp_path):
@@ -295,7 +296,7 @@ def test_shared_image_file_is_loaded_once(tmp_path, rng, monkeypatch):
     }))
     arrays = compiled.arrays
     assert len(calls) == 1
-    assert arrays.tex_pixels.shape == (24, 3)
+    assert arrays.tex_pixels.shape == (24 + 6 + 1, 3)  # 6 × 4 texels and their mip-map levels, 3 × 2 and 1 × 1
     assert len(arrays.tex_info) == 2 and np.all(arrays.tex_info[:, T.TEX_OFFSET] == 0)
     assert sorted(arrays.materials[:3, L.MAT_TEXTURE]) == [-1.0, 0.0, 1.0]
     assert np.all(arrays.materials[:, L.MAT_BUMP] == -1.0)

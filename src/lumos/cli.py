@@ -132,10 +132,10 @@ def _render_flags(render: argparse.ArgumentParser) -> None:
                         "ambient, diffuse, specular, emitted, reflected, transmitted; path also variance (of each "
                         "pixel's mean), noisy (the image before --denoise), direct (what --max-depth 0 gathers) and "
                         "indirect (the rest)")
-    ras = render.add_argument_group("scan-line rendering (--method raster)")
-    ras.add_argument("--no-mipmap", dest="mipmap", action="store_const", const=False, help="look textures up at "
-                     "each pixel's centre instead of filtering them over its footprint (mip-mapping): shows the "
-                     "aliasing that filtering removes")
+    tex = render.add_argument_group("textures (--method raster, raycast or whitted)")
+    tex.add_argument("--no-mipmap", dest="mipmap", action="store_const", const=False, help="look textures up at "
+                     "each pixel's centre instead of filtering them over its footprint (mip-mapping; ray cones in "
+                     "raycast and whitted): shows the aliasing that filtering removes")
     path = render.add_argument_group("path tracing (--method path)")
     path.add_argument("--time-limit", type=float, metavar="SECONDS", help="stop after the pass of samples that "
                       "crosses this time; the image holds the samples taken so far (Ctrl-C also stops after the "
@@ -348,8 +348,9 @@ def run_render(args: argparse.Namespace, started: float) -> int:
     cfg = api.resolve_settings(scene, overrides)  # bad flags fail here, before anything is compiled
     if args.solution is not None and cfg.method != "radiosity":
         raise LumosError(f"--solution is a radiosity solution; method {cfg.method} does not draw one")
-    if args.mipmap is not None and cfg.method != "raster":
-        raise LumosError(f"--no-mipmap is a raster setting; method {cfg.method} does not filter textures")
+    if args.mipmap is not None and cfg.method not in ("raster", "raycast", "whitted"):
+        raise LumosError(f"--no-mipmap is a setting of raster, raycast and whitted; method {cfg.method} does not "
+                         f"filter textures")
     radiosity_given = _radiosity_overrides(args)
     if radiosity_given and cfg.method != "radiosity":
         flag = "--" + next(iter(radiosity_given["radiosity"])).replace("_", "-")

@@ -114,7 +114,8 @@ def _whitted(scene, compiled, cfg, x, y, context) -> dict:
     value, log, light_log, used, weight = W.explain_pixel(
         compiled.arrays, cam_vecs, cam_params, np.array(scene.camera.shutter, np.float64), np.int64(cfg.width),
         np.int64(cfg.height), np.int64(x), np.int64(y), np.int64(mode), np.int64(spp), np.int64(cfg.seed),
-        np.int64(max_depth), float(cfg.adaptive_threshold), np.int64(cfg.adaptive_depth), np.int64(rows))
+        np.int64(max_depth), float(cfg.adaptive_threshold), np.int64(cfg.adaptive_depth), np.int64(rows),
+        bool(cfg.mipmap))
     used = int(used)
     n_lights = len(scene.lights)
     nodes = [_whitted_node(log[r], light_log[r * max(n_lights, 1):r * max(n_lights, 1) + n_lights], context)

@@ -232,10 +232,10 @@ def _material_names(scene, materials: _Materials) -> list[str]:
     return [names.get(id(m), "(default)" if m is not None else "(light)") for m in materials.materials]
 
 
-def compile_raster(scene, tessellation: int, shadows: bool, mipmap: bool) -> CompiledScene:
+def compile_raster(scene, tessellation: int, shadows: bool) -> CompiledScene:
     """The scene for scan conversion: its objects as polygons (`CompiledScene.raster`, shapes tessellated with
     `tessellation` segments) and, for the optional shadow rays (`shadows`), a BVH over those same polygons
-    instead of the analytic shapes; `mipmap`: its textures with mip-map pyramids."""
+    instead of the analytic shapes."""
     materials = _Materials()
     names = [obj.name or f"{obj.type}#{i}" for i, obj in enumerate(scene.objects)]
     object_materials = [materials.add(scene.material_of(obj)) for obj in scene.objects]
@@ -253,12 +253,12 @@ def compile_raster(scene, tessellation: int, shadows: bool, mipmap: bool) -> Com
         for mat, obj in {(int(a), int(b)) for a, b in info[:, :2]}:
             sel = (info[:, 0] == mat) & (info[:, 1] == obj)
             tri_parts.append((verts[sel], None, uvs[sel], mat, obj))
-    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names, mipmaps=mipmap)
+    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names)
     compiled.raster = mesh
     return compiled
 
 
-def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False) -> CompiledScene:
+def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledScene:
     light_kind, light_samples, light_vecs, light_scalars = lights
     tri_verts, tri_normals, tri_uvs, tri_info, tri_tangents = _concat_triangles(tri_parts)
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
@@ -299,7 +299,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, mipmaps=False)
     shape_ids = np.array(bounded, dtype=np.int64)[order[~is_tri] - n_tri] if len(bounded) else np.zeros(0, np.int64)
     prim_ref[~is_tri] = ~shape_ids.astype(np.int32)
 
-    tex_info, tex_pixels = build_textures(materials, mipmaps)  # also fills the rows' MAT_TEXTURE / MAT_BUMP
+    tex_info, tex_pixels = build_textures(materials)  # also fills the rows' MAT_TEXTURE / MAT_BUMP
     material_rows = materials.array()
     if n_shape:
         shape_mats = material_rows[shape_info[:, L.INFO_MATERIAL]]

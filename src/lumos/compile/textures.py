@@ -6,8 +6,9 @@ Images are read once each with Pillow (two materials naming the same file share 
 is decoded from sRGB to linear RGB (`tonemap.srgb_decode`); a bump map is data, not colour: its height is the
 Rec. 709 luminance of the file's raw values scaled to [0, 1], not decoded; a normal map keeps its raw RGB; an
 opacity texture keeps the image's alpha channel (its raw luminance when it has none) in all three channels.
-Rows are stored bottom row first; for the scan-line renderer a colour image is followed by its mip-map levels
-(`mip_levels`).
+Rows are stored bottom row first; a colour image, a height map or a normal map is followed by its mip-map levels
+(`mip_levels`; every method that filters textures reads them: raster, raycast and whitted), an opacity image is not
+(cut-outs are looked up at a point).
 
 A material's textures are consecutive tex_info rows, in list order; a texture applied to `opacity` and to
 colours as well becomes two rows (the colour one first), so that a row reads either colour or coverage.
@@ -32,16 +33,17 @@ _MODES = {"replace": T.MODE_REPLACE, "multiply": T.MODE_MULTIPLY}
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
-def build_textures(materials, mipmaps: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def build_textures(materials) -> tuple[np.ndarray, np.ndarray]:
     """Texture table of a `compile._Materials`: (tex_info float64 (n, TEX_SIZE), tex_pixels float32 (m, 3)).
-    With `mipmaps`, each colour image is followed by its mip-map levels (the scan-line renderer filters with
-    them; the ray methods look up level 0 only and skip building them).
+    Each colour, height and normal image is followed by its mip-map levels: raster, raycast and whitted filter
+    with them (unless `render.mipmap` is false, which the kernels decide, so the scene compiles the same for both);
+    a pyramid costs a third more texels and a few ms per megatexel.
 
     Writes the first tex_info row of each material's textures (or -1) and their count into its MAT_TEXTURE and
     MAT_TEXTURE_COUNT columns, 1.0 into MAT_CUTOUT where one of them applies to opacity (0.0 elsewhere), and its
     bump map's row (or -1) into MAT_BUMP, in place in `materials.rows`, so call it before `materials.array()`.
     """
-    table = _Table(mipmaps)
+    table = _Table()
     for row, material in zip(materials.rows, materials.materials):
         row[L.MAT_TEXTURE], row[L.MAT_TEXTURE_COUNT], row[L.MAT_CUTOUT] = -1.0, 0.0, 0.0
         if material is None:  # an area light's emitter
@@ -54,8 +56,7 @@ def build_textures(materials, mipmaps: bool = False) -> tuple[np.ndarray, np.nda
 
 
 class _Table:
-    def __init__(self, mipmaps: bool):
-        self.mipmaps = mipmaps
+    def __init__(self):
         self.infos: list[np.ndarray] = []
         self.lists: dict[tuple, tuple[int, int]] = {}  # ids of a material's texture models -> first row, count
         self.bumps: dict[int, int] = {}  # id(bump model) -> tex_info row
@@ -113,7 +114,7 @@ class _Table:
             texels = load_texels(path, kind=kind)
             h, w = texels.shape[:2]
             # bottom row first: v = 0 at the bottom
-            levels = mip_levels(texels[::-1]) if self.mipmaps and kind == "color" else [texels[::-1]]
+            levels = mip_levels(texels[::-1]) if kind in ("color", "height", "normal") else [texels[::-1]]
             self.images[key] = (self.n_pixels, w, h, len(levels))
             for level in levels:
                 self.pixels.append(level.reshape(-1, 3))
@@ -157,8 +158,13 @@ def mip_levels(texels: np.ndarray) -> list[np.ndarray]:
     filter; for even sizes, the mean of 2 × 2), down to 1 × 1."""
     levels = [np.asarray(texels, np.float32)]
     while levels[-1].shape[0] > 1 or levels[-1].shape[1] > 1:
-        top = levels[-1].astype(np.float64)
+        top = levels[-1]
         h, w = top.shape[:2]
+        if h % 2 == 0 and w % 2 == 0:  # 2 × 2 means, summed as the two passes below sum them, 4× as fast
+            pairs = top[0::2, 0::2].astype(np.float64) + top[1::2, 0::2]
+            levels.append((0.25 * (pairs + (top[0::2, 1::2].astype(np.float64) + top[1::2, 1::2]))).astype(np.float32))
+            continue
+        top = top.astype(np.float64)
         top = _shrink(top, max(1, h // 2), axis=0)
         levels.append(_shrink(top, max(1, w // 2), axis=1).astype(np.float32))
     return levels
@@ -170,6 +176,9 @@ def _shrink(a: np.ndarray, m: int, axis: int) -> np.ndarray:
     n = a.shape[axis]
     if m == n:
         return a
+    if n == 2 * m:  # the mean of each pair (the same sum as below, without its taps of weight 0)
+        a = np.moveaxis(a, axis, 0)
+        return np.moveaxis(0.5 * a[0::2] + 0.5 * a[1::2], 0, axis)
     lo = np.arange(m) * (n / m)
     taps = int(np.ceil(n / m)) + 1
     j = np.floor(lo).astype(np.int64)[:, None] + np.arange(taps)[None, :]  # (m, taps) candidate inputs

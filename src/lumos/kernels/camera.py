@@ -7,7 +7,15 @@
 
 With one sample per pixel the pixel centre is used (jx = jy = 0.5); otherwise `spp` stratified jittered points.
 Random dimensions 0–1 place the sample in the pixel, 2–3 on the lens.
+
+Texture filtering in the ray methods follows each camera ray's cone (`camera_cone`; Akenine-Möller et al. 2019,
+"Texture Level of Detail Strategies for Real-Time Ray Tracing"): perspective, width 0 at the eye and spread
+2·tan(fov/2)/H radians, one pixel; orthographic, the width of a pixel, 2·(size/2)/H, and no spread. With `spp` > 1
+each sample's cone is narrowed by max(1/8, 1/√spp), as pbrt scales its ray differentials, so that the samples
+resolve what lies within the pixel.
 """
+
+import math
 
 from .jit import njit_inline
 from .layout import CAM_APERTURE, CAM_FOCUS, CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
@@ -27,6 +35,18 @@ def camera_ray(cam_vecs, cam_params, width, height, x, y, sample, spp, seed, pix
     if cam_params[CAM_APERTURE] != 0.0:
         lx, ly = rand01(seed, pixel, sample, 2), rand01(seed, pixel, sample, 3)
     return camera_ray_at(cam_vecs, cam_params, width, height, x + jx, y + jy, lx, ly)
+
+
+@njit_inline
+def camera_cone(cam_params, height, spp, on):
+    """(width at the origin, spread angle) of a camera ray's cone (module doc); (0, 0), no filtering, unless
+    `on`."""
+    if not on:
+        return 0.0, 0.0
+    scale = max(0.125, 1.0 / math.sqrt(spp))
+    if cam_params[CAM_ORTHO] != 0.0:
+        return 2.0 * cam_params[CAM_HALF_SIZE] / height * scale, 0.0
+    return 0.0, 2.0 * cam_params[CAM_TAN_HALF_FOV] / height * scale
 
 
 @njit_inline

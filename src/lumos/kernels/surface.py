@@ -207,3 +207,39 @@ def offset_origin(p, n, d_out, eps):
     if n[0] * d_out[0] + n[1] * d_out[1] + n[2] * d_out[2] < 0.0:
         scale = -scale
     return madd(p, n, scale)
+
+
+@njit
+def curvature_seen(surf, ref, d, n_geo):
+    """The surface's curvature at a hit as the ray (unit direction d) meets it, n_geo the geometric normal that
+    `surface_at` returns there (outward on a sphere), for ray cones' spread
+    (`methods.whitted_trace`): positive where it bulges towards the ray (convex), negative where it is hollow.
+    A sphere's 1/radius (its transform's mean scale); a triangle with vertex normals, the least-squares rate at
+    which the normals turn along its edges, Σ Δn·Δp / Σ |Δp|²; 0 for the rest (taken as flat)."""
+    if ref >= 0:
+        if (surf.tri_info[ref, INFO_FLAGS] & FLAG_NORMALS) == 0:
+            return 0.0
+        v = surf.tri_verts
+        nn = surf.tri_normals
+        num = 0.0
+        den = 0.0
+        for i, j in ((0, 1), (1, 2), (2, 0)):
+            for k in range(3):
+                dp = np.float64(v[ref, 3 * j + k]) - np.float64(v[ref, 3 * i + k])
+                num += (np.float64(nn[ref, 3 * j + k]) - np.float64(nn[ref, 3 * i + k])) * dp
+                den += dp * dp
+        if not den > 0.0:
+            return 0.0
+        facing = 0.0
+        for k in range(3):
+            facing += (nn[ref, k] + nn[ref, 3 + k] + nn[ref, 6 + k]) * d[k]
+        return num / den if facing < 0.0 else -num / den
+    s = ~ref
+    if surf.shape_info[s, INFO_KIND] != SHAPE_SPHERE:
+        return 0.0
+    m = surf.shape_xform[s]
+    scale = 0.0
+    for r in range(3):
+        scale += math.sqrt(m[r, 0] * m[r, 0] + m[r, 1] * m[r, 1] + m[r, 2] * m[r, 2])
+    k = scale / 3.0  # the canonical sphere has radius 1
+    return k if n_geo[0] * d[0] + n_geo[1] * d[1] + n_geo[2] * d[2] < 0.0 else -k

@@ -6,6 +6,9 @@ illumination model.
     dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time)  # the same, or a mesh's tangents
     n_bumped = bump_normal(tex, mat, u, v, p, n, dpdu, dpdv)        # unit; n itself when there is no bump map
     hole = is_hole(tex, mat, u, v, p)                               # an opacity texture's α < ALPHA_CUTOFF
+    fp = cone_footprint(surf, ref, part, p, n_geo, d, width, time)  # a ray cone's (du/dx, dv/dx, du/dy, dv/dy)
+    ka, kd, ks, kr, ke = material_coeffs_filtered(tex, mat, u, v, p, *fp)       # filtered over it
+    n_bumped = bump_normal_filtered(tex, mat, u, v, p, n, dpdu, dpdv, *fp)
 
 * `tex` is a `layout.Textures` view (`views.textures_of`), `surf` a `layout.Surfaces` view.
 * `mat` is the material's ROW, `materials[material_id]` (float64 (MAT_SIZE,)); its textures are the
@@ -37,27 +40,31 @@ Everything is a tuple of float64; nothing allocates.
     TEX_BUMP_TYPE  bump maps: BUMP_HEIGHT (Blinn bumps of a height field) or BUMP_NORMAL (a tangent-space normal
                    map; its texels are raw RGB, `normal_mapped`)
     TEX_STRENGTH   bump maps: the height scale (world units of displacement per unit of height)
-    TEX_LEVELS     colour images: how many mip-map levels follow one another from OFFSET (1: the image alone)
+    TEX_LEVELS     colour, height and normal images: how many mip-map levels follow one another from OFFSET (1: the
+                   image alone; opacity images have no others)
 
 tex_pixels: float32 (m, 3). An image of W×H texels occupies rows OFFSET .. OFFSET + W·H − 1, bottom image row
 first: texel (i, j) is `tex_pixels[OFFSET + j·W + i]`, centred at uv ((i + 0.5)/W, (j + 0.5)/H), so v = 0 is the
 bottom of the picture and images appear upright on a sphere's latitude–longitude map and on planar maps.
 Colour textures hold linear RGB (decoded from sRGB at compile time); bump maps hold the Rec. 709 luminance of
-the file's raw (not decoded) values in all three channels, a height in [0, 1]. A colour image's mip-map levels
-follow it: level k + 1 is level k box-filtered to max(1, w_k // 2) × max(1, h_k // 2) texels (in linear RGB),
-stored the same way right after level k.
+the file's raw (not decoded) values in all three channels, a height in [0, 1]. A colour, height or normal
+image's mip-map levels follow it: level k + 1 is level k box-filtered to max(1, w_k // 2) × max(1, h_k // 2)
+texels (colours in linear RGB), stored the same way right after level k.
 
-## Filtering by the footprint (the scan-line renderer's textures)
+## Filtering by the footprint (raster's screen-space derivatives, or a ray cone's)
 
 `texture_rgb_filtered` / `material_coeffs_filtered` take the screen-space derivatives of (u, v), a footprint
 (du/dx, dv/dx, du/dy, dv/dy) per pixel, and filter each pattern over it; a zero footprint gives exactly the
-point lookup of `texture_rgb` (what the ray methods use).
+point lookup of `texture_rgb` (what the ray methods use under `mipmap: false`, and `path` always).
 
     image    trilinear mip-mapping (Williams 1983): the level of detail λ = log2 of the longer of the two
              footprint axes measured in level-0 texels, bilinear in levels ⌊λ⌋ and ⌊λ⌋ + 1, blended by λ's
              fraction; λ <= 0 is the bilinear lookup itself (magnification), λ beyond the last level its texel
     checker, stripes   box-filtered in closed form (as pbrt's checkerboard does): over a box of half-widths
-             (ds, dt) = the larger footprint component along each axis, the fraction of "odd" cells along s is
+             (ds, dt) = half the larger footprint component along each axis (a box one pixel wide, the pixel's
+             own extent; pbrt's box of half-width one footprint blurs twice as far, and measured against a
+             supersampled floor to the horizon left 0.6 of the point lookup's error where this box leaves 0.2),
+             the fraction of "odd" cells along s is
              (C(s + ds) − C(s − ds)) / 2ds with C(x) = ⌊x/2⌋ + 2·max(x/2 − ⌊x/2⌋ − ½, 0) the integral of the
              odd-cell indicator; the checker's odd fraction is f_s(1 − f_t) + f_t(1 − f_s), and the colour the
              blend of COLOR0 and COLOR1 by it. Far away both fade to their mean instead of aliasing.
@@ -72,6 +79,26 @@ point lookup of `texture_rgb` (what the ray methods use).
              the quintic fade) over unit gradients at multiples of 45° picked by an integer hash of the lattice
              point, whose magnitude stays below √2/2. The lattice repeats every round(scale) cells, so integer
              scales tile seamlessly across u = 0 / 1 (the sphere's seam).
+
+## Filtered bumps
+
+`bump_normal_filtered` takes the same footprint as the colour lookups (raster's, or a ray cone's): a height image's
+height comes from the mip-map level of detail λ the footprint picks (as `texture_rgb_filtered`), and its central
+differences span one texel of that level, 2^λ level-0 texels; a noise height field's differences span the
+footprint (the slope averaged over it); a normal map's texel is filtered as a colour image's (mip-mapped raw RGB,
+renormalised after the tangent frame is applied). Far away the bumps average out instead of turning into
+noise. A zero footprint is `bump_normal` exactly.
+
+## Ray cones (the ray methods' footprint)
+
+`cone_footprint` turns a ray cone (Akenine-Möller et al. 2019, "Texture Level of Detail Strategies for Real-Time
+Ray Tracing", Ray Tracing Gems ch. 20) into the footprint (du/dx, dv/dx, du/dy, dv/dy): at the hit the cone is
+`width` wide (one pixel's spacing: `kernels.camera.camera_cone` at the eye, growing by its spread times the
+distance); two axes of that length at right angles to the ray, one in the plane of the ray and the normal (it
+lengthens by 1/|cos θ| on the surface) and one across it, are carried along the ray onto the tangent plane and
+into (u, v) by the least-squares inverse of (∂p/∂u, ∂p/∂v) (`surface_tangents`). Whitted's reflected and
+transmitted rays carry the cone on, as wide as it was at the hit and spread further by the surface's curvature
+(`methods.whitted_trace`).
 
 ## Bump mapping (Blinn 1978, "Simulation of wrinkled surfaces", eq. 4 without the small terms)
 
@@ -102,7 +129,7 @@ from .layout import (
     MAT_TEXTURE_COUNT,
 )
 from .tangents import surface_tangents
-from .vec import cross, dot, length, normalize
+from .vec import cross, dot, length, normalize, orthonormal_basis
 
 # tex_info columns
 TEX_KIND = 0
@@ -210,9 +237,10 @@ def texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy):
             return _bilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv)
         lod = 0.5 * math.log2(longest) if longest < 1e300 else 1e9
         return _trilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv, lod)
-    fs = _odd_fraction(su * u + info[TEX_SHIFT_U], su * max(abs(dudx), abs(dudy)))
+    # half a footprint each side: the box is one pixel wide
+    fs = _odd_fraction(su * u + info[TEX_SHIFT_U], 0.5 * su * max(abs(dudx), abs(dudy)))
     if kind == TEXTURE_CHECKER:
-        ft = _odd_fraction(sv * v + info[TEX_SHIFT_V], sv * max(abs(dvdx), abs(dvdy)))
+        ft = _odd_fraction(sv * v + info[TEX_SHIFT_V], 0.5 * sv * max(abs(dvdx), abs(dvdy)))
         x = fs * (1.0 - ft) + ft * (1.0 - fs)
     else:  # stripes
         x = fs
@@ -448,28 +476,39 @@ def is_hole(tex, mat, u, v, p):
     return has_cutout(tex, mat) and material_alpha(tex, mat, u, v, p) < ALPHA_CUTOFF
 
 
-@njit
+@njit_inline
 def bump_normal(tex, mat, u, v, p, n, dpdu, dpdv):
     """The unit shading normal tilted by the material's bump map at (u, v) (Blinn 1978, see the module doc), or
     given by its normal map (`normal_mapped`); n unchanged when the material has none, its strength is 0 (height
     maps) or the tangents are degenerate."""
+    return bump_normal_filtered(tex, mat, u, v, p, n, dpdu, dpdv, 0.0, 0.0, 0.0, 0.0)
+
+
+@njit
+def bump_normal_filtered(tex, mat, u, v, p, n, dpdu, dpdv, dudx, dvdx, dudy, dvdy):
+    """`bump_normal` filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy) (module doc: filtered bumps); a zero
+    footprint is the point lookup."""
     row = np.int64(mat[MAT_BUMP])
     if row < 0:
         return n
     info = tex.tex_info[row]
     if info[TEX_BUMP_TYPE] == BUMP_NORMAL:
-        return normal_mapped(tex, row, u, v, p, n, dpdu, dpdv)
+        return normal_mapped(tex, row, u, v, p, n, dpdu, dpdv, dudx, dvdx, dudy, dvdy)
     strength = info[TEX_STRENGTH]
     if strength == 0.0:
         return n
-    if info[TEX_KIND] == TEXTURE_IMAGE:  # one texel
-        du = 1.0 / (info[TEX_SCALE_U] * info[TEX_WIDTH])
-        dv = 1.0 / (info[TEX_SCALE_V] * info[TEX_HEIGHT])
-    else:
-        du = _NOISE_STEP / info[TEX_SCALE_U]
-        dv = _NOISE_STEP / info[TEX_SCALE_V]
-    h_u = (texture_rgb(tex, row, u + du, v, p)[0] - texture_rgb(tex, row, u - du, v, p)[0]) / (2.0 * du)
-    h_v = (texture_rgb(tex, row, u, v + dv, p)[0] - texture_rgb(tex, row, u, v - dv, p)[0]) / (2.0 * dv)
+    lod = 0.0
+    if info[TEX_KIND] == TEXTURE_IMAGE:  # one texel (of the level the footprint picks)
+        texels = _footprint_texels(info, dudx, dvdx, dudy, dvdy)
+        if texels > 1.0:
+            lod = math.log2(texels)
+        du = min(max(texels, 1.0), info[TEX_WIDTH]) / (info[TEX_SCALE_U] * info[TEX_WIDTH])
+        dv = min(max(texels, 1.0), info[TEX_HEIGHT]) / (info[TEX_SCALE_V] * info[TEX_HEIGHT])
+    else:  # noise: the height's slope averaged over the footprint
+        du = max(_NOISE_STEP / info[TEX_SCALE_U], 0.5 * max(abs(dudx), abs(dudy)))
+        dv = max(_NOISE_STEP / info[TEX_SCALE_V], 0.5 * max(abs(dvdx), abs(dvdy)))
+    h_u = (_height(tex, row, u + du, v, p, lod) - _height(tex, row, u - du, v, p, lod)) / (2.0 * du)
+    h_v = (_height(tex, row, u, v + dv, p, lod) - _height(tex, row, u, v - dv, p, lod)) / (2.0 * dv)
     c = cross(dpdu, dpdv)
     area = length(c)
     if area == 0.0:
@@ -487,13 +526,40 @@ def bump_normal(tex, mat, u, v, p, n, dpdu, dpdv):
     return bumped
 
 
+@njit_inline
+def _footprint_texels(info, dudx, dvdx, dudy, dvdy):
+    """The longer axis of the footprint in level-0 texels of image row `info` (0 for no footprint; huge, not
+    inf, for a footprint that is)."""
+    w = info[TEX_WIDTH] * info[TEX_SCALE_U]
+    h = info[TEX_HEIGHT] * info[TEX_SCALE_V]
+    longest = max((dudx * w) ** 2 + (dvdx * h) ** 2, (dudy * w) ** 2 + (dvdy * h) ** 2)
+    if not longest < 1e300:
+        return 0.0 if longest != longest else 1e150  # NaN: no footprint
+    return math.sqrt(longest)
+
+
+@njit_inline
+def _height(tex, row, u, v, p, lod):
+    """Channel 0 of texture `row` at (u, v), from mip-map level of detail `lod` (0: level 0, bilinear)."""
+    info = tex.tex_info[row]
+    if not (lod > 0.0) or info[TEX_LEVELS] <= 1.0:
+        return texture_rgb(tex, row, u, v, p)[0]
+    if info[TEX_WRAP] == WRAP_CLAMP:
+        u = min(max(u, 0.0), _CLAMP_MAX)
+        v = min(max(v, 0.0), _CLAMP_MAX)
+    su = info[TEX_SCALE_U]
+    sv = info[TEX_SCALE_V]
+    return _trilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv, lod)[0]
+
+
 @njit
-def normal_mapped(tex, row, u, v, p, n, dpdu, dpdv):
+def normal_mapped(tex, row, u, v, p, n, dpdu, dpdv, dudx, dvdx, dudy, dvdy):
     """The unit normal of tangent-space normal map `row` at (u, v): texel c (raw RGB in [0, 1]) → m = 2c − 1,
     m_x and m_y times the strength, N' = normalize(m_x·T + m_y·B + m_z·n) with T = dpdu made orthogonal to n
     (Gram–Schmidt) and B = ±(n × T), on dpdv's side (glTF's frame: B = w·(n × T) with the tangent's
-    handedness w). n unchanged where T vanishes or N' is zero."""
-    c = texture_rgb(tex, row, u, v, p)
+    handedness w). n unchanged where T vanishes or N' is zero. The texel is filtered over the footprint
+    (du/dx, dv/dx, du/dy, dv/dy) as colour images are (`texture_rgb_filtered`): averaged normals, renormalised."""
+    c = texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy)
     k = tex.tex_info[row, TEX_STRENGTH]
     mx = k * (2.0 * c[0] - 1.0)
     my = k * (2.0 * c[1] - 1.0)
@@ -529,3 +595,40 @@ def bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time):
         c = cross(n, t)
         return t, (w * c[0], w * c[1], w * c[2])
     return surface_tangents(surf, ref, part, p, n, time)
+
+
+# ------------------------------------------------------------------------------------------------ ray cones
+
+
+@njit
+def cone_footprint(surf, ref, part, p, n, d, width, time):
+    """(du/dx, dv/dx, du/dy, dv/dy) of a ray cone of `width` (one pixel's spacing across the ray, world units)
+    along unit direction d that meets the surface at p, unit geometric normal n (module doc: ray cones): the
+    cone's cross-section, two axes of length `width` at right angles to d, carried along d onto the tangent plane
+    and into (u, v) through the surface's (∂p/∂u, ∂p/∂v). Zeros (the point lookup) for width 0."""
+    if width == 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    dpdu, dpdv = surface_tangents(surf, ref, part, p, n, time)
+    a = dot(dpdu, dpdu)
+    b = dot(dpdu, dpdv)
+    c = dot(dpdv, dpdv)
+    det = a * c - b * b
+    if not det > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    cos = dot(n, d)
+    cos = math.copysign(max(abs(cos), 1e-9), cos)
+    e1 = (n[0] - cos * d[0], n[1] - cos * d[1], n[2] - cos * d[2])  # the axis the slant stretches
+    l1 = length(e1)
+    if l1 < 1e-12:  # head-on: any axis at right angles to d
+        e1, _ = orthonormal_basis(d)
+        l1 = 0.0
+    else:
+        e1 = (e1[0] / l1, e1[1] / l1, e1[2] / l1)
+    e2 = cross(d, e1)
+    k = width * l1 / cos  # along d back onto the tangent plane: x − d·(n·x)/(n·d), n·e1 = l1, n·e2 = 0
+    x = (width * e1[0] - k * d[0], width * e1[1] - k * d[1], width * e1[2] - k * d[2])
+    y = (width * e2[0], width * e2[1], width * e2[2])
+    inv = 1.0 / det
+    xu, xv = dot(x, dpdu), dot(x, dpdv)
+    yu, yv = dot(y, dpdu), dot(y, dpdv)
+    return ((c * xu - b * xv) * inv, (a * xv - b * xu) * inv, (c * yu - b * yv) * inv, (a * yv - b * yu) * inv)

@@ -12,7 +12,7 @@ def compile_for(scene, settings):
     from ..compile import compile_raster, compile_scene
 
     if settings.method == "raster":
-        return compile_raster(scene, settings.tessellation, settings.shadows, settings.mipmap)
+        return compile_raster(scene, settings.tessellation, settings.shadows)
     compiled = compile_scene(scene)
     if settings.method == "path":
         from ..compile import emitters

@@ -8,31 +8,34 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels.camera import camera_ray
+from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.jit import njit, njit_inline, njit_serial
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .whitted_trace import point_radiance, store_aovs, trace, trace_scratch
 
 
 @njit_serial
-def corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, corners, rays_per_row):
+def corner_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, mipmap, corners,
+                rays_per_row):
     """adaptive, stage 1: one ray through every pixel corner (W+1 × H+1 of them, shared by neighbours): its
     radiance in corners[y, x, 0:3] and, when corners has 21 channels, its terms after it. Corner rows y0 … y1−1
-    (rays_per_row here has height + 1 entries, one per row of corners)."""
-    _corner_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, corners, rays_per_row,
+    (rays_per_row here has height + 1 entries, one per row of corners). `mipmap`: textures filtered over each
+    ray's cone, a pixel wide (`kernels.camera.camera_cone`)."""
+    _corner_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth,
+                 camera_cone(cam_params, height, 1, mipmap), corners, rays_per_row,
                  trace_scratch(max_depth, 0, 0, corners.shape[2] > 3))
 
 
 @njit
-def _corner_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, corners, rays_per_row,
-                 scratch):
+def _corner_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, cone, corners,
+                 rays_per_row, scratch):
     geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
     for y in range(y0, y1):
         rays = 0
         for x in range(width + 1):
             key = y * (width + 1) + x
             rgb, n = point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, np.float64(x),
-                            np.float64(y), seed, key, 0, max_depth, scratch, sa.background)
+                            np.float64(y), seed, key, 0, max_depth, scratch, sa.background, cone)
             corners[y, x, 0], corners[y, x, 1], corners[y, x, 2] = rgb
             for k in range(3, corners.shape[2]):  # the terms, when they are asked for
                 corners[y, x, k] = scratch[6][k - 3]
@@ -41,21 +44,23 @@ def _corner_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed
 
 
 @njit_serial
-def adaptive_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, threshold,
+def adaptive_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, mipmap, threshold,
                    max_level, corners, radiance, samples, terms, rays_per_row):
     """adaptive, stage 2: each pixel from its corners, its squares cut in four where the corners differ
     (`adaptive_pixel`); with 21-channel corners, also its terms. Rows y0 … y1−1."""
     n = (np.int64(1) << max_level) + 1
     channels = corners.shape[2]
-    _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, threshold, max_level,
+    _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth,
+                   camera_cone(cam_params, height, 1, mipmap), threshold, max_level,
                    corners, radiance, samples, terms, rays_per_row, trace_scratch(max_depth, 0, 0, channels > 3),
                    np.empty((n, n, channels)), np.full((n, n), -1, np.int64), np.zeros((1, 1)),
                    np.empty((4 * max_level + 4, 4), np.int64), np.empty(channels))
 
 
 @njit
-def _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, threshold, max_level,
-                   corners, radiance, samples, terms, rays_per_row, scratch, grid, stamp, weights, stack, value):
+def _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, cone, threshold,
+                   max_level, corners, radiance, samples, terms, rays_per_row, scratch, grid, stamp, weights, stack,
+                   value):
     """(`adaptive_rows`; stack: the squares to visit, as ix, iy, size in cells, level)"""
     channels = corners.shape[2]
     geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
@@ -63,8 +68,8 @@ def _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, se
         rays = 0
         for x in range(width):
             count, nr = adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed,
-                                       max_depth, threshold, max_level, corners, scratch, sa.background, grid, stamp,
-                                       stack, weights, value)
+                                       max_depth, cone, threshold, max_level, corners, scratch, sa.background, grid,
+                                       stamp, stack, weights, value)
             rays += nr
             radiance[y, x, 0], radiance[y, x, 1], radiance[y, x, 2] = value[0], value[1], value[2]
             for k in range(3, channels):
@@ -74,7 +79,7 @@ def _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, se
 
 
 @njit_inline
-def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth,
+def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth, cone,
                    threshold, max_level, corners, scratch, background, grid, stamp, stack, weights, value):
     """Pixel (x, y) by adaptive subdivision: value[:] = the area-weighted mean over its squares of their corners'
     values (every channel of `corners`: radiance, then the terms if present); returns (camera rays it took, rays
@@ -142,7 +147,8 @@ def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, h
                 continue
             stamp[py, px] = pixel
             rgb, nr = point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height,
-                             x + px * inv, y + py * inv, seed, key, py * n + px, max_depth, scratch, background)
+                             x + px * inv, y + py * inv, seed, key, py * n + px, max_depth, scratch, background,
+                             cone)
             grid[py, px, 0], grid[py, px, 1], grid[py, px, 2] = rgb
             for ch in range(3, channels):
                 grid[py, px, ch] = scratch[6][ch - 3]
@@ -158,23 +164,24 @@ def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, h
 
 
 @njit_serial
-def aov_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth,
+def aov_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, max_depth, mipmap,
               depth, normal, albedo, object_id, rays_per_row):
     """adaptive with AOVs: one more ray through each pixel centre, for the AOVs only. Rows y0 … y1−1."""
-    _aov_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, depth, normal, albedo, object_id,
-              rays_per_row, trace_scratch(np.int64(0)))
+    _aov_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed,
+              camera_cone(cam_params, height, 1, mipmap), depth, normal, albedo, object_id, rays_per_row,
+              trace_scratch(np.int64(0)))
 
 
 @njit
-def _aov_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, depth, normal, albedo, object_id,
+def _aov_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, cone, depth, normal, albedo, object_id,
               rays_per_row, scratch):
     geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
     for y in range(y0, y1):
         rays = 0
         for x in range(width):
             o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, 0, 1, seed, y * width + x)
-            rgb, n, info = trace(geo, surf, lit, tex, o, d, cam_time[0], np.int64(0), seed, y * width + x, 0, scratch,
-                                 sa.background)
+            rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, cam_time[0], np.int64(0), seed, y * width + x, 0,
+                                 scratch, sa.background)
             rays += n
             store_aovs(x, y, info, depth, normal, albedo, object_id)
         rays_per_row[y] += rays

@@ -33,7 +33,7 @@ from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, LIGHT_SPHERE, MAT
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
 from ..kernels.surface import shading_side
-from ..kernels.texture import TEX_SIZE, bump_normal, material_coeffs_filtered
+from ..kernels.texture import TEX_SIZE, bump_normal_filtered, material_coeffs_filtered
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .common import Film, allocate_aovs, check_memory, finish, set_threads, start
@@ -84,12 +84,14 @@ def _facing(n, V):
 @njit_inline
 def _surface_at(tex, mat, p, n, u, v, frame, footprint):
     """(ka, kd, ks, emission, shading normal): the material's coefficients at (u, v), filtered over `footprint`
-    (du/dx, dv/dx, du/dy, dv/dy), and n tilted by its bump map or given by its normal map (the polygon's
-    ∂p/∂u, ∂p/∂v in frame[0:6]; normal maps take their tangent frame from these, not from a mesh's tangents)."""
+    (du/dx, dv/dx, du/dy, dv/dy), and n tilted by its bump map or given by its normal map, filtered over the
+    same footprint (the polygon's ∂p/∂u, ∂p/∂v in frame[0:6]; normal maps take their tangent frame from these,
+    not from a mesh's tangents)."""
     ka, kd, ks, _, ke = material_coeffs_filtered(tex, mat, u, v, p, footprint[0], footprint[1], footprint[2],
                                                  footprint[3])
     if mat[MAT_BUMP] >= 0.0:
-        n = bump_normal(tex, mat, u, v, p, n, (frame[0], frame[1], frame[2]), (frame[3], frame[4], frame[5]))
+        n = bump_normal_filtered(tex, mat, u, v, p, n, (frame[0], frame[1], frame[2]), (frame[3], frame[4], frame[5]),
+                                 footprint[0], footprint[1], footprint[2], footprint[3])
     return ka, kd, ks, ke, n
 
 

@@ -4,7 +4,8 @@ Each camera ray finds its nearest hit through the BVH (past the holes of opacity
 surface there is shaded by the classic model
 (`kernels.illumination.illuminate`) with no shadow rays: a surface that faces a light is lit by it (the
 textbook's simplifying assumption of ray casting). A ray that reaches an area light sees its radiance; a ray
-that hits nothing returns the background.
+that hits nothing returns the background. Textures and bump maps are filtered over each camera ray's cone, one
+pixel wide (`kernels.camera.camera_cone`, `kernels.texture.cone_footprint`), unless `mipmap` is false.
 """
 
 from __future__ import annotations
@@ -13,30 +14,37 @@ import numpy as np
 
 from .. import config
 from ..compile.camera import camera_arrays
-from ..kernels.camera import camera_ray
+from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_serial
-from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_SHININESS
+from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_SHININESS, MAT_TEXTURE
 from ..kernels.surface import shading_side, surface_at
-from ..kernels.texture import bump_frame, bump_normal, material_coeffs
+from ..kernels.texture import bump_frame, bump_normal_filtered, cone_footprint, material_coeffs_filtered
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
 from .common import Film, finish, run_bands, start
 
 
 @njit
-def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stack, stack_t, per_light, log_base):
+def shade_hit(surf, lit, tex, geo, o, d, cone, hit, seed, pixel, sample, shadows, stack, stack_t, per_light,
+              log_base):
     """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays,
-    (ambient, diffuse, specular, emitted)); each light's share goes to `per_light` from row `log_base` (>= 0; `illuminate_terms`)."""
+    (ambient, diffuse, specular, emitted)); each light's share goes to `per_light` from row `log_base` (>= 0;
+    `illuminate_terms`). The textures are filtered over the footprint of the ray's cone (`cone`: width at o,
+    spread; `kernels.camera.camera_cone`)."""
     t, ref, b1, b2, part = hit
     p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
     mat = lit.materials[mat_id]
     V = mul(d, -1.0)
-    ka, kd, ks, kr, ke = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
+    fp = (0.0, 0.0, 0.0, 0.0)
+    if mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0:
+        fp = cone_footprint(surf, ref, part, p, n_geo, d, abs(cone[0] + cone[1] * t), 0.0)
+    # the material's coefficients, with its textures applied
+    ka, kd, ks, kr, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
     if mat[MAT_BUMP] >= 0.0:
         dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n_sh, 0.0)
-        n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
+        n_sh = bump_normal_filtered(tex, mat, u, v, p, n_sh, dpdu, dpdv, fp[0], fp[1], fp[2], fp[3])
     # emitted light: two-sided for emissive materials, one-sided for rect and disk area lights
     emit = 1.0
     if light_id >= 0 and lit.light_kind[light_id] != LIGHT_SPHERE and dot(n_geo, V) < 0.0:
@@ -53,25 +61,26 @@ def shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, sample, shadows, stac
 
 
 @njit_serial
-def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, radiance, depth, normal, albedo,
-                  object_id, terms, want_terms, rays_per_row, explain, light_log):
+def _raycast_rows(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, mipmap, radiance, depth, normal,
+                  albedo, object_id, terms, want_terms, rays_per_row, explain, light_log):
     """Rows y0 … y1−1 (`_raycast_band`), with their traversal stacks."""
     stack = np.empty(config.BVH_STACK, np.int64)
     stack_t = np.empty(config.BVH_STACK)
-    _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, radiance, depth, normal, albedo,
-                  object_id, terms, want_terms, rays_per_row, explain, light_log, stack, stack_t)
+    _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, mipmap, radiance, depth, normal,
+                  albedo, object_id, terms, want_terms, rays_per_row, explain, light_log, stack, stack_t)
 
 
 @njit
-def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, radiance, depth, normal, albedo,
-                  object_id, terms, want_terms, rays_per_row, explain, light_log, stack, stack_t):
+def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, mipmap, radiance, depth, normal,
+                  albedo, object_id, terms, want_terms, rays_per_row, explain, light_log, stack, stack_t):
     """One band of rows: `spp` camera rays per pixel, box-filtered; the first sample's depth, normal, albedo and
     object id in those (H, W) buffers, or nowhere when they are None (Numba compiles that case apart, without
     the stores: even an untaken branch to them costs a tenth of a render of a large mesh); with `want_terms`, the
     mean of the samples' terms (ambient, diffuse, specular, emitted; reflected and transmitted stay 0) in
     terms[y, x, :18]. At pixel `explain` (x, y), the first sample's per-light shares go to `light_log`
-    (`lumos.explain`)."""
+    (`lumos.explain`). With `mipmap`, textures are filtered over each camera ray's cone (`camera_cone`)."""
     geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    cone = camera_cone(cam_params, height, spp, mipmap)
     for y in range(y0, y1):
         rays = 0
         inv = 1.0 / spp
@@ -92,8 +101,9 @@ def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, ra
                             terms[y, x, 9 + k] += inv * sa.background[k]
                     continue
                 logged = x == explain[0] and y == explain[1] and s == 0
-                rgb, n_sh, kd, obj, extra, parts = shade_hit(surf, lit, tex, geo, o, d, hit, seed, pixel, s, False,
-                                                             stack, stack_t, light_log, 0 if logged else -1)
+                rgb, n_sh, kd, obj, extra, parts = shade_hit(surf, lit, tex, geo, o, d, cone, hit, seed, pixel, s,
+                                                             False, stack, stack_t, light_log,
+                                                             0 if logged else -1)
                 rays += extra
                 if want_terms:
                     for j in range(4):
@@ -133,8 +143,9 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
     if explain is not None:
         pixel, light_log, bands = np.array(explain[:2], np.int64), explain[2], [(explain[1], explain[1] + 1)]
     run_bands(lambda r0, r1: _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, r0, r1, spp,
-                                           settings.seed, b.radiance, b.depth, b.normal, b.albedo, b.object_id,
-                                           b.terms, b.want_terms, b.rays_per_row, pixel, light_log),
+                                           settings.seed, bool(settings.mipmap), b.radiance, b.depth, b.normal,
+                                           b.albedo, b.object_id, b.terms, b.want_terms, b.rays_per_row, pixel,
+                                           light_log),
               height, progress, bands)
     return finish(settings, b, threads, np.full((height, width), spp, np.int32), int(b.rays_per_row.sum()),
                   primary_rays=width * height * spp)

@@ -21,6 +21,9 @@ displayed, [0, 1]-clamped colour), the square is cut in four through five new ra
 levels (a point shared by neighbouring squares is traced once); each square's value is the mean of its corners,
 a pixel's the area-weighted mean of its squares. The `samples` AOV holds the number of camera rays each pixel
 took.
+
+Textures and bump maps are filtered over each ray's cone (`kernels.camera.camera_cone`; the secondary rays carry
+it on, `whitted_trace.trace`) unless `mipmap` is false.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..compile.camera import camera_arrays
-from ..kernels.camera import camera_ray
+from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
 from ..errors import LumosError
 from ..kernels.views import geometry_of, lighting_of, owned_views, surfaces_of, textures_of
@@ -41,24 +44,25 @@ ANTIALIAS_MODES = {"none": AA_NONE, "supersample": AA_SUPERSAMPLE, "adaptive": A
 
 
 @njit_serial
-def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth,
+def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth, mipmap,
                  radiance, depth, normal, albedo, object_id, samples, terms, want_terms, rays_per_row):
     """antialias none / supersample: `spp` camera rays per pixel (the pixel centre when spp is 1); with
-    `want_terms`, the mean of the samples' terms in terms[y, x, :18]. Rows y0 … y1−1."""
-    _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth, radiance, depth,
-                 normal, albedo, object_id, samples, terms, want_terms, rays_per_row,
-                 trace_scratch(max_depth, 0, 0, want_terms), np.zeros(18))
+    `want_terms`, the mean of the samples' terms in terms[y, x, :18]. Rows y0 … y1−1. `mipmap`: textures filtered
+    over each ray's cone (`kernels.camera.camera_cone`)."""
+    _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth,
+                 camera_cone(cam_params, height, spp, mipmap), radiance, depth, normal, albedo, object_id, samples,
+                 terms, want_terms, rays_per_row, trace_scratch(max_depth, 0, 0, want_terms), np.zeros(18))
 
 
 @njit
-def _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth, radiance, depth,
-                 normal, albedo, object_id, samples, terms, want_terms, rays_per_row, scratch, tsum):
+def _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth, cone, radiance,
+                 depth, normal, albedo, object_id, samples, terms, want_terms, rays_per_row, scratch, tsum):
     geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
     for y in range(y0, y1):
         rays = 0
         for x in range(width):
             rgb, n = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
-                                  max_depth, scratch, sa.background, depth, normal, albedo, object_id, tsum,
+                                  max_depth, cone, scratch, sa.background, depth, normal, albedo, object_id, tsum,
                                   want_terms)
             rays += n
             radiance[y, x, 0], radiance[y, x, 1], radiance[y, x, 2] = rgb
@@ -70,7 +74,7 @@ def _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
 
 
 @njit_inline
-def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed, max_depth,
+def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed, max_depth, cone,
                  scratch, background, depth, normal, albedo, object_id, tsum, want_terms):
     """The mean of pixel (x, y)'s `spp` samples, and the rays traced; AOVs from its first sample; with
     `want_terms` the mean of its samples' terms in tsum (18). With logging on in `scratch`, every sample's rays
@@ -84,7 +88,7 @@ def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, hei
     for s in range(spp):
         o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
         time = shutter_time(cam_time, seed, pixel, s)
-        rgb, n, info = trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, s, scratch, background)
+        rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, pixel, s, scratch, background)
         rays += n
         r += rgb[0]
         g += rgb[1]
@@ -103,8 +107,9 @@ def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, hei
 
 @njit_alloc
 def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode, spp, seed, max_depth, threshold,
-                  max_level, log_rows):
-    """Pixel (x, y) exactly as `render_whitted` makes it, with every ray logged (`lumos.explain`).
+                  max_level, log_rows, mipmap=True):
+    """Pixel (x, y) exactly as `render_whitted` makes it (with `mipmap` as the render's setting), with every ray
+    logged (`lumos.explain`).
 
     Returns (value (3,), log (rows, LOG_COLS), per-light log (rows · n_lights, PER_LIGHT_SIZE): row r's lights
     from r · n_lights, rows used, weight of each row's camera ray in the pixel (rows,), 0 for the rays it
@@ -114,12 +119,13 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
     log, log_n = scratch[7], scratch[8]
     weight = np.zeros(log_rows)
     value = np.zeros(3)
+    cone = camera_cone(cam_params, height, spp if mode != AA_ADAPTIVE else 1, mipmap)
     if mode != AA_ADAPTIVE:
         depth, normal, albedo = np.zeros((height, width)), np.zeros((height, width, 3)), np.zeros((height, width, 3))
         object_id = np.zeros((height, width), np.int32)
         rgb, _ = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
-                              max_depth, scratch, sa.background, depth, normal, albedo, object_id, np.zeros(18),
-                              False)
+                              max_depth, cone, scratch, sa.background, depth, normal, albedo, object_id,
+                              np.zeros(18), False)
         value[0], value[1], value[2] = rgb
         for row in range(log_n[0]):
             if log[row, LOG_DEPTH] == 0.0:
@@ -133,14 +139,15 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
         for cx in range(x, x + 2):
             grid_row[(cy - y) * cells, (cx - x) * cells] = log_n[0]
             rgb, _ = point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, np.float64(cx),
-                            np.float64(cy), seed, cy * (width + 1) + cx, 0, max_depth, scratch, sa.background)
+                            np.float64(cy), seed, cy * (width + 1) + cx, 0, max_depth, scratch, sa.background,
+                            cone)
             corners[cy, cx, 0], corners[cy, cx, 1], corners[cy, cx, 2] = rgb
     start = log_n[0]
     grid = np.empty((n, n, 3))
     stamp = np.full((n, n), -1, np.int64)
     stack = np.empty((4 * max_level + 4, 4), np.int64)
     weights = np.zeros((n, n))
-    adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth,
+    adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth, cone,
                    threshold, max_level, corners, scratch, sa.background, grid, stamp, stack, weights, value)
     for row in range(start, log_n[0]):
         if log[row, LOG_DEPTH] == 0.0:
@@ -166,6 +173,7 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
         raise LumosError("render.max_depth: whitted needs a finite number of bounces (-1, unbounded, is for path)")
     max_depth = np.int64(settings.resolved_max_depth())
     mode = ANTIALIAS_MODES[settings.antialias]
+    mipmap = bool(settings.mipmap)
     w, h = np.int64(width), np.int64(height)
     samples = np.zeros((height, width), np.int32)
     rays = 0
@@ -174,21 +182,21 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
         corner_rays = np.zeros(height + 1, np.int64)
         half = None if progress is None else (lambda f: progress(0.5 * f))
         run_bands(lambda r0, r1: corner_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                             seed, max_depth, corners, corner_rays), height + 1, half)
+                                             seed, max_depth, mipmap, corners, corner_rays), height + 1, half)
         rest = None if progress is None else (lambda f: progress(0.5 + 0.5 * f))
         run_bands(lambda r0, r1: adaptive_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                               seed, max_depth, float(settings.adaptive_threshold),
+                                               seed, max_depth, mipmap, float(settings.adaptive_threshold),
                                                np.int64(settings.adaptive_depth), corners, b.radiance, samples,
                                                b.terms, b.rays_per_row), height, rest)
         if set(settings.aov) & set(SURFACE_AOVS):
             run_bands(lambda r0, r1: aov_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                              seed, max_depth, b.depth, b.normal, b.albedo, b.object_id,
+                                              seed, max_depth, mipmap, b.depth, b.normal, b.albedo, b.object_id,
                                               b.rays_per_row), height)
         rays = int(corner_rays.sum())
     else:
         spp = np.int64(1 if mode == AA_NONE else settings.spp)
         run_bands(lambda r0, r1: _sample_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                              spp, seed, max_depth, b.radiance, b.depth, b.normal, b.albedo,
+                                              spp, seed, max_depth, mipmap, b.radiance, b.depth, b.normal, b.albedo,
                                               b.object_id, samples, b.terms, b.want_terms, b.rays_per_row),
                   height, progress)
     return finish(settings, b, threads, samples, rays + int(b.rays_per_row.sum()), primary_rays=int(samples.sum()))

@@ -13,11 +13,11 @@ from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline
-from ..kernels.layout import LIGHT_SPHERE, MAT_FRESNEL, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS
+from ..kernels.layout import LIGHT_SPHERE, MAT_FRESNEL, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS, MAT_TEXTURE
 from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
-from ..kernels.surface import offset_origin, shading_side, surface_at
-from ..kernels.texture import bump_frame, bump_normal, material_coeffs
+from ..kernels.surface import curvature_seen, offset_origin, shading_side, surface_at
+from ..kernels.texture import bump_frame, bump_normal_filtered, cone_footprint, material_coeffs_filtered
 
 #: Secondary rays whose path weight (largest channel) is below this are not traced.
 CUTOFF = 1e-3
@@ -41,29 +41,31 @@ T_AMBIENT, T_DIFFUSE, T_SPECULAR, T_EMITTED, T_REFLECTED, T_TRANSMITTED = 0, 3, 
 
 @njit_alloc
 def trace_scratch(max_depth, log_rows=0, n_lights=0, terms=False):
-    """Per-thread work arrays for `trace`: the ray stack (origin, direction, weight; depth, media count, branch,
+    """Per-thread work arrays for `trace`: the ray stack (origin, direction, weight, cone width and spread; depth,
+    media count, branch,
     log row of the ray that spawned it; media objects and indices of refraction), the BVH traversal stack,
     the sample's terms (18: see T_*; `terms` False: none kept, an empty array), and the ray-tree log (`log_rows` rows, none by default; its count is −1
     when logging is off) with each logged hit's per-light shares (`illuminate_terms`' per_light, for
     `n_lights` lights)."""
     size = 2 * max_depth + 4  # depth-first: at most one pending sibling per level, plus the ray in hand
     log_n = np.full(1, -1 if log_rows == 0 else 0, np.int64)
-    return (np.empty((size, 9)), np.empty((size, 4), np.int64), np.empty((size, MAX_MEDIA), np.int64),
+    return (np.empty((size, 11)), np.empty((size, 4), np.int64), np.empty((size, MAX_MEDIA), np.int64),
             np.empty((size, MAX_MEDIA)), np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK),
             np.zeros(18 if terms else 0), np.zeros((max(log_rows, 1), LOG_COLS)), log_n,
             np.zeros((max(log_rows, 1) * max(n_lights, 1), PER_LIGHT_SIZE)), np.int64(max(n_lights, 1)))
 
 
 @njit
-def _push(st_f, st_i, st_mo, st_mi, sp, o, d, w0, w1, w2, depth, n_media, src_mo, src_mi, src, drop, add_obj, add_ior,
-          branch, parent):
-    """Push a ray; its media are those of stack entry `src` (already popped, still readable) without object
-    `drop` (>= 0) and with (add_obj, add_ior) appended (add_obj >= 0). `branch` is the kind of the camera
-    ray's child it descends from (the term it counts for); `parent` the log row of the ray that spawned it
-    (the kind of the ray itself is in the sign: >= 0 reflected, < 0 transmitted, parent = ~value)."""
+def _push(st_f, st_i, st_mo, st_mi, sp, o, d, w0, w1, w2, cone, depth, n_media, src_mo, src_mi, src, drop, add_obj,
+          add_ior, branch, parent):
+    """Push a ray (its cone: width, spread); its media are those of stack entry `src` (already popped, still
+    readable) without object `drop` (>= 0) and with (add_obj, add_ior) appended (add_obj >= 0). `branch` is the
+    kind of the camera ray's child it descends from (the term it counts for); `parent` the log row of the ray that
+    spawned it (the kind of the ray itself is in the sign: >= 0 reflected, < 0 transmitted, parent = ~value)."""
     st_f[sp, 0], st_f[sp, 1], st_f[sp, 2] = o
     st_f[sp, 3], st_f[sp, 4], st_f[sp, 5] = d
     st_f[sp, 6], st_f[sp, 7], st_f[sp, 8] = w0, w1, w2
+    st_f[sp, 9], st_f[sp, 10] = cone
     st_i[sp, 0] = depth
     st_i[sp, 2] = branch
     st_i[sp, 3] = parent
@@ -98,8 +100,10 @@ def _add_term(tacc, k, w0, w1, w2, c):
 
 
 @njit_inline
-def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scratch, background):
-    """Radiance along the camera ray (o, d) at shutter time `time`.
+def trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, pixel, sample, scratch, background):
+    """Radiance along the camera ray (o, d) at shutter time `time`. `cone` (width at o, spread angle;
+    `kernels.camera.camera_cone`) is its ray cone, which the reflected and transmitted rays carry on (wider with
+    distance, spread more by curved surfaces): the textures at each hit are filtered over its footprint.
 
     Returns (rgb, rays traced, (t, n_shading, kd, object id) of the primary hit; t = −1 on a miss). The
     sample's terms are left in scratch[6] (T_*: the primary hit's ambient, diffuse, specular and emitted light
@@ -120,6 +124,7 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
     st_f[0, 0], st_f[0, 1], st_f[0, 2] = o
     st_f[0, 3], st_f[0, 4], st_f[0, 5] = d
     st_f[0, 6] = st_f[0, 7] = st_f[0, 8] = 1.0
+    st_f[0, 9], st_f[0, 10] = cone
     st_i[0, 0] = 0
     st_i[0, 1] = 0
     st_i[0, 2] = RAY_CAMERA
@@ -171,13 +176,18 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         mat = lit.materials[mat_id]
         V = (-rd[0], -rd[1], -rd[2])
         entering = n_geo[0] * rd[0] + n_geo[1] * rd[1] + n_geo[2] * rd[2] < 0.0
+        width = st_f[top, 9] + st_f[top, 10] * t  # the cone's (signed) width here
+        fp = (0.0, 0.0, 0.0, 0.0)
+        if mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0:
+            fp = cone_footprint(surf, ref, hit[4], p, n_geo, rd, abs(width), time)
         if mat[MAT_BUMP] >= 0.0:
             dpdu, dpdv = bump_frame(surf, tex, mat, ref, hit[4], hit[2], hit[3], p, n_sh, time)
-            n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
+            n_sh = bump_normal_filtered(tex, mat, u, v, p, n_sh, dpdu, dpdv, fp[0], fp[1], fp[2], fp[3])
         n_s = shading_side(n_sh, n_geo, V)
         n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
         # emitted light: one-sided for rect and disk area lights
-        ka, kd, ks, kr, ke = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
+        # the material's coefficients, with its textures applied
+        ka, kd, ks, kr, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
         e = (0.0, 0.0, 0.0)
         if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or entering:
             e = ke
@@ -227,6 +237,11 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         wt0, wt1, wt2 = kt
         transmit = wt0 > 0.0 or wt1 > 0.0 or wt2 > 0.0
         t_dir = rd
+        # their cones: as wide as this one here; a curved surface spreads them (ray cones, paraxial: a convex
+        # mirror by twice the angle its normals turn across the cone, a lens by (1 − η) times it)
+        spread = st_f[top, 10]
+        bend = 0.0 if width == 0.0 else curvature_seen(surf, ref, rd, n_geo) * width
+        t_cone = (width, spread)
         drop, add_obj, add_ior = np.int64(-1), np.int64(-1), 1.0
         if transmit and is_solid(surf, ref):
             # the media on both sides of this surface
@@ -246,6 +261,7 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
                     break
                 drop = np.int64(obj)
             eta = n1 / n2
+            t_cone = (width, eta * spread - (1.0 - eta) * bend)
             cos_i = -(rd[0] * n_s[0] + rd[1] * n_s[1] + rd[2] * n_s[2])
             ok, t_dir = refract(rd, n_s, eta)
             if row >= 0:
@@ -273,14 +289,15 @@ def trace(geo, surf, lit, tex, o, d, time, max_depth, seed, pixel, sample, scrat
         if max(rw0, rw1, rw2) >= CUTOFF:
             r_dir = reflect(rd, n_s)
             origin = offset_origin(p, n_geo, r_dir, config.RAY_EPSILON)
-            sp = _push(st_f, st_i, st_mo, st_mi, sp, origin, r_dir, rw0, rw1, rw2, depth + 1, n_media, st_mo, st_mi,
-                       top, np.int64(-1), np.int64(-1), 1.0, RAY_REFLECTED if depth == 0 else branch, np.int64(row))
+            sp = _push(st_f, st_i, st_mo, st_mi, sp, origin, r_dir, rw0, rw1, rw2, (width, spread + 2.0 * bend),
+                       depth + 1, n_media, st_mo, st_mi, top, np.int64(-1), np.int64(-1), 1.0,
+                       RAY_REFLECTED if depth == 0 else branch, np.int64(row))
         if transmit:
             tw0, tw1, tw2 = w0 * wt0, w1 * wt1, w2 * wt2
             if max(tw0, tw1, tw2) >= CUTOFF:
                 origin = offset_origin(p, n_geo, t_dir, config.RAY_EPSILON)
-                sp = _push(st_f, st_i, st_mo, st_mi, sp, origin, t_dir, tw0, tw1, tw2, depth + 1, n_media, st_mo,
-                           st_mi, top, drop, add_obj, add_ior, RAY_TRANSMITTED if depth == 0 else branch,
+                sp = _push(st_f, st_i, st_mo, st_mi, sp, origin, t_dir, tw0, tw1, tw2, t_cone, depth + 1, n_media,
+                           st_mo, st_mi, top, drop, add_obj, add_ior, RAY_TRANSMITTED if depth == 0 else branch,
                            ~np.int64(row))
     return (r, g, b), rays, (aov_t, aov_n, aov_kd, aov_obj)
 
@@ -305,14 +322,15 @@ def store_aovs(x, y, info, depth, normal, albedo, object_id):
 
 @njit_inline
 def point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, fx, fy, seed, key, sample, max_depth,
-           scratch, background):
-    """The radiance through image point (fx, fy); `key` and `sample` index its random numbers (lens, time)."""
+           scratch, background, cone):
+    """The radiance through image point (fx, fy); `key` and `sample` index its random numbers (lens, time); `cone`
+    the camera ray's cone (`trace`)."""
     lx, ly = rand01(seed, key, sample, 2), rand01(seed, key, sample, 3)
     o, d = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
     time = shutter_time(cam_time, seed, key, sample)
     log, log_n = scratch[7], scratch[8]
     first = log_n[0]
-    rgb, n, info = trace(geo, surf, lit, tex, o, d, time, max_depth, seed, key, sample, scratch, background)
+    rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, key, sample, scratch, background)
     if 0 <= first < log.shape[0]:  # where the camera ray went through the image (lumos.explain)
         log[first, LOG_FX] = fx
         log[first, LOG_FY] = fy

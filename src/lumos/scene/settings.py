@@ -76,7 +76,8 @@ class RenderSettings(StrictModel):
     adaptive_depth: Annotated[int, Field(ge=0, le=6)] = 3
     # scan-line rendering (method: raster)
     perspective_correct: bool = True
-    #: raster: filter textures over each pixel's footprint (mip-mapped images, box-filtered checker and stripes)
+    #: raster, raycast, whitted: filter textures, bump and normal maps over each pixel's footprint (mip-mapped
+    #: images, box-filtered checker and stripes; the ray methods by ray cones)
     mipmap: bool = True
     cull_backfaces: bool = False
     shadows: bool = False
