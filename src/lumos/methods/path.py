@@ -203,18 +203,12 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         wo = (-d[0], -d[1], -d[2])
         entering = n_geo[0] * d[0] + n_geo[1] * d[1] + n_geo[2] * d[2] < 0.0
         ka, kd, ks, kr, le = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
-        # stage 2: emission found by the BSDF-sampled ray, weighted against light sampling (a textured emitter
-        # is not in the emitter table, so BSDF rays find it with full weight)
+        # stage 2: emission found by the BSDF-sampled ray, weighted against light sampling
         le0, le1, le2 = le
         if (le0 > 0.0 or le1 > 0.0 or le2 > 0.0) and (light < 0 or lit.light_kind[light] == LIGHT_SPHERE
                                                       or entering):
-            w = 1.0
-            if not prev_delta and mode != MODE_BSDF:
-                e = _emitter_entry(em, ref, light)
-                if e >= 0:  # an emitter light sampling could also have found (pdf 0: it could not, from there)
-                    pdf_light = emitter_pdf(em, lit, surf, e, prev_p, d, t, n_geo, ref, hit[4], time)
-                    if pdf_light > 0.0:
-                        w = 0.0 if mode == MODE_LIGHT else power_heuristic(prev_pdf, pdf_light)
+            w = _emission_weight(em, lit, surf, ref, light, hit[4], prev_p, d, t, n_geo, time, prev_delta, prev_pdf,
+                                 mode)
             L0 += b0 * le0 * w
             L1 += b1 * le1 * w
             L2 += b2 * le2 * w
@@ -253,27 +247,15 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         # stage 4: next-event estimation (the smooth lobes only: a mirror or glass cannot meet a light sample)
         if p_d + p_s > 0.0:
             ul1, ul2 = _draw2(sampler, points, col, key, pair + 2, dim + 4)
-            wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, u_pick, ul1, ul2, time)
-            if pdf_light > 0.0 and (delta or mode != MODE_BSDF):
-                cos_i = n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]
-                if cos_i > 0.0 and n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] > 0.0:
-                    fd, fs, pdf_bsdf = eval_smooth(kd, ks, exponent, p_d, p_s, n_s, wo, wi)
-                    c0 = (fd[0] * led[0] + fs[0] * les[0]) * cos_i
-                    c1 = (fd[1] * led[1] + fs[1] * les[1]) * cos_i
-                    c2 = (fd[2] * led[2] + fs[2] * les[2]) * cos_i
-                    if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
-                        origin, ws, t_light = _shadow_ray(p, n_geo, wi, dist)
-                        rays += 1
-                        if not occluded(geo, surf, lit, origin, ws, t_light, stack, stack_t, time):
-                            if delta or mode == MODE_LIGHT:
-                                w = 1.0 / pdf_light
-                            else:
-                                w = power_heuristic_over(pdf_light, pdf_bsdf)
-                            L0 += b0 * c0 * w
-                            L1 += b1 * c1 * w
-                            L2 += b2 * c2 * w
-                            if depth == 0:
-                                D0, D1, D2 = D0 + c0 * w, D1 + c1 * w, D2 + c2 * w
+            c0, c1, c2, w, seen, extra = _next_event(geo, surf, lit, em, p, n_geo, n_s, n_g, wo, kd, ks, exponent, p_d,
+                                                     p_s, u_pick, ul1, ul2, mode, stack, stack_t, time)
+            rays += extra
+            if seen:
+                L0 += b0 * c0 * w
+                L1 += b1 * c1 * w
+                L2 += b2 * c2 * w
+                if depth == 0:
+                    D0, D1, D2 = D0 + c0 * w, D1 + c1 * w, D2 + c2 * w
         # stage 5: BSDF sampling: the direction the path goes on in, and its weight f·cos/pdf
         u1, u2 = _draw2(sampler, points, col, key, pair + 1, dim + 2)
         p_smooth = p_d + p_s
@@ -291,20 +273,10 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
             w0, w1, w2 = kr[0] * inv_p, kr[1] * inv_p, kr[2] * inv_p
             prev_delta = True
         else:
-            u_t = (u_lobe - p_smooth - p_r) / p_t  # uniform in [0, 1) again: reflect or refract
-            inv_p = 1.0 / p_t
-            w0, w1, w2 = kt[0] * inv_p, kt[1] * inv_p, kt[2] * inv_p
+            wi, w0, w1, w2, eta2, n_media = _transmit(surf, ref, mat, obj, kt, p_t, (u_lobe - p_smooth - p_r) / p_t,
+                                                       wo, n_s, d, entering, media_obj, media_ior, n_media)
+            eta_scale /= eta2
             prev_delta = True
-            if is_solid(surf, ref):
-                n1, n2 = _media_across(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
-                eta = n1 / n2
-                wi, through, F = sample_dielectric(wo, n_s, eta, u_t)
-                if through:
-                    w0, w1, w2 = w0 * eta * eta, w1 * eta * eta, w2 * eta * eta  # radiance scales by (n1/n2)²
-                    eta_scale /= eta * eta
-                    n_media = _media_update(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
-            else:
-                wi = d  # a thin transparent sheet: straight through
         b0 *= w0
         b1 *= w1
         b2 *= w2
@@ -326,6 +298,66 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         o = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
         d = wi
     return (L0, L1, L2), rays, first_t, first_obj, albedo, normal, (e0, e1, e2), (D0, D1, D2)
+
+
+@njit_inline
+def _emission_weight(em, lit, surf, ref, light, part, prev_p, d, t, n_geo, time, prev_delta, prev_pdf, mode):
+    """The MIS weight of emission a BSDF-sampled ray found: 1 after the camera, a mirror or glass (delta), or
+    for an emitter light sampling cannot find (a textured one: not in the emitter table); else the power
+    heuristic against light sampling's pdf for the same direction (0 under light sampling alone)."""
+    if prev_delta or mode == MODE_BSDF:
+        return 1.0
+    e = _emitter_entry(em, ref, light)
+    if e < 0:
+        return 1.0
+    pdf_light = emitter_pdf(em, lit, surf, e, prev_p, d, t, n_geo, ref, part, time)
+    if not pdf_light > 0.0:  # (pdf 0: it could not have found it from there)
+        return 1.0
+    return 0.0 if mode == MODE_LIGHT else power_heuristic(prev_pdf, pdf_light)
+
+
+@njit_inline
+def _next_event(geo, surf, lit, em, p, n_geo, n_s, n_g, wo, kd, ks, exponent, p_d, p_s, u_pick, ul1, ul2, mode, stack,
+                stack_t, time):
+    """Next-event estimation at p: an emitter sampled (u_pick, ul1, ul2), the smooth lobes evaluated towards
+    it, a shadow ray, MIS against BSDF sampling. Returns (its unweighted contribution
+    f·L·cos per channel, its MIS weight, whether the light is seen, rays traced)."""
+    wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, u_pick, ul1, ul2, time)
+    if not (pdf_light > 0.0 and (delta or mode != MODE_BSDF)):
+        return 0.0, 0.0, 0.0, 0.0, False, 0
+    cos_i = n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]
+    if not (cos_i > 0.0 and n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] > 0.0):
+        return 0.0, 0.0, 0.0, 0.0, False, 0
+    fd, fs, pdf_bsdf = eval_smooth(kd, ks, exponent, p_d, p_s, n_s, wo, wi)
+    c0 = (fd[0] * led[0] + fs[0] * les[0]) * cos_i
+    c1 = (fd[1] * led[1] + fs[1] * les[1]) * cos_i
+    c2 = (fd[2] * led[2] + fs[2] * les[2]) * cos_i
+    if not (c0 > 0.0 or c1 > 0.0 or c2 > 0.0):
+        return 0.0, 0.0, 0.0, 0.0, False, 0
+    origin, ws, t_light = _shadow_ray(p, n_geo, wi, dist)
+    if occluded(geo, surf, lit, origin, ws, t_light, stack, stack_t, time):
+        return 0.0, 0.0, 0.0, 0.0, False, 1
+    w = 1.0 / pdf_light if delta or mode == MODE_LIGHT else power_heuristic_over(pdf_light, pdf_bsdf)
+    return c0, c1, c2, w, True, 1
+
+
+@njit_inline
+def _transmit(surf, ref, mat, obj, kt, p_t, u_t, wo, n_s, d, entering, media_obj, media_ior, n_media):
+    """The transmission lobe chosen (with probability p_t; u_t uniform in [0, 1) again): through a solid's
+    surface, reflect or refract by the Fresnel factor (radiance scaled by (n1/n2)² when it refracts, and the
+    media updated); through a thin sheet, straight on. Returns (direction, weight (3), the η² that
+    roulette's throughput divides by (1 when nothing refracts), the media count)."""
+    inv_p = 1.0 / p_t
+    w0, w1, w2 = kt[0] * inv_p, kt[1] * inv_p, kt[2] * inv_p
+    if not is_solid(surf, ref):
+        return d, w0, w1, w2, 1.0, n_media  # a thin transparent sheet: straight through
+    n1, n2 = _media_across(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
+    eta = n1 / n2
+    wi, through, F = sample_dielectric(wo, n_s, eta, u_t)
+    if not through:
+        return wi, w0, w1, w2, 1.0, n_media
+    n_media = _media_update(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
+    return wi, w0 * eta * eta, w1 * eta * eta, w2 * eta * eta, eta * eta, n_media  # radiance ∝ (n1/n2)²
 
 
 @njit_inline
