@@ -9,7 +9,7 @@ not timed), with `--threads` threads:
 1. **Time to the bar.** The error of an image is the mean relative error over 8×8-pixel blocks against the
    converged path-traced image (Mitsuba 3's 16,384-spp Cornell box, unbounded depth, tests/data/cornell_mitsuba/;
    `path` matches it, see BENCHMARKS.md) at 256×256: the metric of the issue and of
-   tests/test_radiosity.py. For `path`, one render per spp count of a ladder; for each radiosity solver (and
+   tests/methods/test_radiosity.py. For `path`, one render per spp count of a ladder; for each radiosity solver (and
    form-factor method), one render per configuration of a ladder of patch sizes, with and without adaptive
    subdivision (stochastic: ray budgets). A render is the whole `lumos.render` call: meshing, form factors,
    solve, display (Gouraud, 1 sample per pixel). The figure is the least time of a configuration whose error

@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import RADIANCE
 
 import lumos
 from lumos.compile import compile_scene
 from lumos.kernels import layout as L
+from lumos.radiosity.solution import Solution
 
 
 def run_cli(capsys, *argv):
@@ -118,3 +120,35 @@ def render(scene: dict, **settings):
 @pytest.fixture
 def rng():
     return np.random.default_rng(20240607)
+
+
+@pytest.fixture
+def solution() -> Solution:
+    """Two unit quads (a floor facing +y and a wall facing −x, apart), each split into two display triangles."""
+    corners = np.array([[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0],  # floor, CCW about +y
+                        [2, 0, 0], [2, 1, 0], [2, 1, 1], [2, 0, 1]], dtype=np.float64)  # wall, CCW about −x
+    normals = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+    return Solution(
+        element_vertices=corners,
+        element_polys=np.array([[0, 1, 2, 3], [4, 5, 6, 7]], np.int32),
+        element_normal=normals,
+        element_area=np.array([1.0, 1.0]),
+        element_reflectance=np.array([[0.7, 0.6, 0.5], [0.2, 0.8, 0.3]]),
+        element_emission=np.array([[0.0, 0.0, 0.0], [1.5, 1.5, 1.5]]),
+        element_radiance=np.array([[0.25, 1.0 / 3.0, 2.5], [1.5, 1.9, 1.6]]),
+        element_object=np.array([0, 3], np.int32),
+        element_material=np.array([1, 0], np.int32),
+        element_patch=np.array([0, 1], np.int32),
+        element_optics=np.array([[0.0] * 9, [0.5, 0.5, 0.5, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]]),
+        element_twin=np.array([-1, -1], np.int32),
+        vertices=corners + 0.0,
+        vertex_normal=np.repeat(normals, 4, axis=0),
+        vertex_radiance=RADIANCE.copy(),
+        faces=np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]], np.int32),
+        face_element=np.array([0, 0, 1, 1], np.int32),
+        settings={"solver": "progressive", "max_area": 0.25, "tolerance": 1e-3, "hemicube": [64, 64],
+                  "nested": {"on": True, "none": None, "name": "Ünïcode"}},
+        stats={"patches": 2, "elements": 2, "solve_s": 0.0123456789, "iterations": np.int64(7),
+               "residual": np.float64(1e-17)},
+        scene_digest="3f786850e387550fdab836ed7e6dc881de23001b",
+    )

@@ -1,10 +1,22 @@
-"""Helpers that more than one test module uses (test modules import this, never each other)."""
+"""Helpers that more than one test module uses (test modules import this, never each other), and the paths tests
+read files from: `DATA` (tests/data), `EXAMPLES` (examples/) and `ROOT` (the repository).
+
+tests/ is on sys.path (`pythonpath` in pyproject.toml), so a test file in any subfolder says `from helpers import
+DATA`; fixtures live in conftest.py, the slow reference twins in naive.py and chi2.py beside this file.
+"""
+
+from pathlib import Path
 
 import numpy as np
 
+#: The repository root, tests/data and examples/.
+ROOT = Path(__file__).resolve().parent.parent
+DATA = ROOT / "tests" / "data"
+EXAMPLES = ROOT / "examples"
 
-#: Lights and camera of the textured scenes that raster and raycast draw alike (test_raster_textures,
-#: test_material_maps).
+
+#: Lights and camera of the textured scenes that raster and raycast draw alike (methods/test_raster_textures.py,
+#: kernels/test_texture_maps.py).
 TEXTURE_LIGHTS = [
     {"type": "point", "position": [3.0, 4.0, 5.0], "intensity": [1.0, 0.95, 0.9]},
     {"type": "directional", "direction": [0.4, -1.0, -0.6], "intensity": 0.3},
@@ -52,3 +64,14 @@ def check_pieces(model) -> None:
             np.testing.assert_allclose(np.linalg.norm(obj["normals"], axis=1), 1.0, atol=1e-9)
         if "uvs" in obj:
             assert obj["uvs"].shape == (n, 2) and np.isfinite(obj["uvs"]).all()
+
+
+#: Display radiance of the 8 vertices of the `solution` fixture (conftest.py): rows 0–1 hold the hand-checked values 0, 0.25, 0.5, 1, 2.
+RADIANCE = np.array([[0.0, 0.5, 1.0], [2.0, 0.25, 0.0], [0.3, 1.7, 0.01], [0.002, 0.8, 5.0],
+                     [1.0, 1.0, 1.0], [0.5, 0.5, 0.5], [0.9, 0.1, 0.6], [3.0, 0.04, 0.7]])
+
+
+def one_line_error(excinfo, path) -> str:
+    message = str(excinfo.value)
+    assert "\n" not in message and str(path) in message, message
+    return message

@@ -9,7 +9,7 @@ Everything in the subset works with the JIT off. Two things to know when adding 
 * Numba and NumPy promote differently: NumPy keeps `float32 · float` in float32 (NEP 50) where Numba goes to
   float64, and Numba's `float()` of a float32 stays float32 where Python's gives a float64. Kernels that mix
   the float32 arrays (triangles, BVH boxes) with float64 must promote explicitly (`np.float64(x)`) to behave
-  the same both ways; `test_bvh.py::test_axis_aligned_rays_through_bvh` guards the case that once broke
+  the same both ways; `kernels/test_bvh_build.py::test_axis_aligned_rays_through_bvh` guards the case that once broke
   (float32 box bound · 1e100 overflowing to inf, culling every node for axis-aligned rays).
 * SplitMix64 arithmetic on NumPy uint64 scalars wraps as intended, but NumPy warns about the overflow; the
   subprocess ignores RuntimeWarning.
@@ -24,8 +24,8 @@ from pathlib import Path
 import pytest
 
 HERE = Path(__file__).resolve().parent
-FILES = ["test_rng.py", "test_sampling.py", "test_intersect.py", "test_bvh.py", "test_illumination.py",
-         "test_raycast.py", "test_raster.py"]
+FILES = ["kernels/test_rng.py", "kernels/test_sampling.py", "kernels/test_intersect.py", "kernels/test_bvh_build.py",
+         "kernels/test_illumination.py", "methods/test_raycast.py", "methods/test_raster.py"]
 MIN_PASSED = 40
 
 

@@ -5,16 +5,15 @@ input errors."""
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import DATA, ROOT
 
 import lumos
 import naive
 
-ROOT = Path(__file__).resolve().parent.parent
-BUNNY = ROOT / "tests" / "data" / "bun_zipper.ply"
+BUNNY = DATA / "bun_zipper.ply"
 
 TETRA = {"type": "mesh", "name": "tet", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
          "faces": [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], "transform": {"translate": [0.2, -2.6, 0.3]}}
@@ -192,7 +191,7 @@ def test_all_hits_match_a_brute_force_twin(solids, rng):
 
 
 def test_all_hits_through_a_closed_mesh_alternate_in_and_out():
-    rc = lumos.RayCaster(ROOT / "tests" / "data" / "tetra.off")
+    rc = lumos.RayCaster(DATA / "tetra.off")
     o = np.array([[0.1, 0.1, -1.0], [0.2, 0.3, 5.0]])
     c = rc.all_hits(o, [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]])
     assert list(c.count) == [2, 2] and list(c.entering) == [True, False, True, False]

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from helpers import EXAMPLES
 from PIL import Image as PILImage
 
 import lumos
@@ -501,7 +502,6 @@ def test_help_gives_reference_and_diff(capsys):
 
 # ----------------------------------------------------------------------------------------- every example
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: Radiosity kept cheap: each primitive one patch (a mesh triangle, a box face), a coarse tessellation, one
 #: shadow ray per form factor, no refinement and a few solver steps; the shading is not what is tested here.
 CHEAP_RADIOSITY = {"patch_size": 1e6, "subdivide": False, "visibility_samples": 1, "max_iterations": 4,

@@ -13,7 +13,7 @@ caption is measured here and printed too:
 
 - `cornell.png`: cornell.yaml (adaptive subdivision on) beside Mitsuba 3's converged path-traced image of the
   same box (tests/data/cornell_mitsuba/ref_depthinf_256.npy: unbounded depth), with the error of the first
-  against the second: the mean relative error over 8x8-pixel blocks, as tests/test_radiosity.py measures it.
+  against the second: the mean relative error over 8x8-pixel blocks, as tests/methods/test_radiosity.py measures it.
 - `display.png`: one solution (2,352 patches) drawn with `display: flat` and `display: gouraud`.
 - `form_factors.png`: ray-cast against hemicube form factors (resolutions 128 and 32), same patches.
 - `subdivision.png`: coarse patches (0.25) with adaptive subdivision off and on: flat, each element's level of
@@ -134,7 +134,7 @@ def measured(figure: str, what: str, value: str) -> None:
 
 def block_error(img: np.ndarray, ref: np.ndarray, k: int = 8) -> float:
     """Mean relative error over k×k-pixel blocks (and channels) where the reference is lit: the measure of
-    tests/test_radiosity.py's Cornell test."""
+    tests/methods/test_radiosity.py's Cornell test."""
     def blocks(a):
         h, w = a.shape[:2]
         return a.reshape(h // k, k, w // k, k, -1).mean(axis=(1, 3))

@@ -132,7 +132,7 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
 
     with watch_compiles(on_first=say_compiling) as watch:
         try:
-            compiled = compile_for(scene, cfg)
+            compiled = compile_for(scene, cfg, solved=solution is not None)
         except LumosError as exc:  # the compile step knows the key path, not the file: name it
             if scene.source is not None and not str(exc).startswith(str(scene.source)):
                 raise LumosError(f"{scene.source}: {exc}") from None

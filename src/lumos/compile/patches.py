@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -266,26 +267,147 @@ def default_patch_size(lo, hi) -> float:
     return max(float(np.linalg.norm(hi - lo)) / 24.0, 1e-6)
 
 
+@dataclass
+class Surface:
+    """One surface of the scene as radiosity meshes it, before it is cut into patches: which object (or area
+    light, numbered after the objects) it belongs to, which of its sides are patches, and its geometry: a
+    parallelogram (`grid`: corner, edge_u, edge_v; cut into cells) or triangles (`triangles()`, computed when
+    asked: a curved shape's tessellation is not needed to know its sides)."""
+
+    object_id: int
+    outer: bool  # the front side (the side the polygons' normals face) is a patch
+    inner: bool  # the back side is a patch
+    group: int  # smoothing group of the display
+    material: object = None  # the scene's Material; None for an area light
+    emission: np.ndarray = None  # an area light's radiance
+    solid: bool = False
+    grid: tuple = None
+    triangles: Callable = None  # () -> (vertices (k, 3), triangles (m, 3))
+
+
+def surfaces(scene, segments: int, plane_lo, plane_hi):
+    """The `Surface`s of every object and area light of `scene`, in order (module doc: sides); planes clipped to
+    the box plane_lo … plane_hi."""
+    from .csg_mesh import csg_pieces
+    from .meshprep import prepare_mesh
+    from .shapes import canonical, frame
+    from .tessellate import tessellate_object
+
+    n_groups = len(scene.objects) + len(scene.lights)  # smoothing groups: objects, area lights, then csg solids
+    for object_id, obj in enumerate(scene.objects):
+        material = scene.material_of(obj)
+        clear = any(c > 0 for c in material.kt)  # a transparent solid: rays inside it meet its inside
+        world = None if obj.transform is None else obj.transform.to_matrix()
+        if obj.type == "csg":  # the scan-line renderer's boolean mesh: closed, one piece per solid that shows
+            pieces = csg_pieces(scene, obj, world, segments, f"objects[{object_id}]")
+            if not pieces:
+                continue
+            offsets = np.cumsum([0] + [len(p.vertices) for p in pieces])
+            inside = _inside_mesh(np.concatenate([p.vertices for p in pieces]),
+                                  np.concatenate([p.faces + k for p, k in zip(pieces, offsets)]),
+                                  _viewpoints(scene, object_id))
+            for piece in pieces:
+                outer, inner = _sides(inside, any(c > 0 for c in piece.material.kt), scene)
+                yield Surface(object_id, outer, inner, n_groups, piece.material, solid=True,  # smoothed per solid
+                              triangles=lambda piece=piece: (piece.vertices, piece.faces))
+                n_groups += 1
+            continue
+        if obj.type in ("mesh", "triangle"):
+            m = prepare_mesh(obj, world)
+            tris = np.asarray(m.polygons, np.int64)
+            closed = obj.type == "mesh" and _closed_and_outward(m.vertices, tris)
+            outer, inner = (_sides(_inside_mesh(m.vertices, tris, _viewpoints(scene, object_id)), clear, scene)
+                            if closed else (True, True))
+            yield Surface(object_id, outer, inner, object_id, material, solid=closed,
+                          triangles=lambda m=m, tris=tris: (m.vertices, tris))
+            continue
+        kind, object_from_canonical = canonical(obj)
+        w = object_from_canonical if world is None else world @ object_from_canonical
+        if kind == L.SHAPE_BOX:
+            outer, inner = _sides(_inside_solid(kind, w, _viewpoints(scene, object_id)), clear, scene)
+            for face in _box_faces(w):
+                yield Surface(object_id, outer, inner, object_id, material, solid=True, grid=face)
+        elif kind == L.SHAPE_RECT:
+            yield Surface(object_id, True, True, object_id, material, grid=(w[:3, 3], w[:3, 0], w[:3, 1]))
+        elif kind == L.SHAPE_PLANE:
+            corner, eu, ev = _plane_rect(w, plane_lo, plane_hi)
+            if np.dot(np.cross(eu, ev), w[:3, 2]) < 0:
+                eu, ev = ev, eu
+            yield Surface(object_id, True, True, object_id, material, grid=(corner, eu, ev))
+        else:
+            capped = getattr(obj, "capped", True)
+            closed = kind == L.SHAPE_SPHERE or (kind in (L.SHAPE_CYLINDER, L.SHAPE_CONE) and capped)
+            where = f"objects[{object_id}]"
+            tessellate_object(kind, w, 3, capped, where)  # checks the placement now, cheaply (3 segments)
+            outer, inner = (_sides(_inside_solid(kind, w, _viewpoints(scene, object_id)), clear, scene)
+                            if closed else (True, True))
+
+            def tessellated(kind=kind, w=w, capped=capped, where=where):
+                t = tessellate_object(kind, w, segments, capped, where)
+                return t.vertices, t.faces
+
+            yield Surface(object_id, outer, inner, object_id, material, solid=closed, triangles=tessellated)
+    # area lights: their emitting shapes, lit side only (the other side of a rect or disk blocks light)
+    n_objects = len(scene.objects)
+    for i, light in enumerate(scene.lights):
+        if light.type != "area":
+            continue
+        le = np.asarray(light.radiance, np.float64)
+        if light.shape == "rect":
+            yield Surface(n_objects + i, True, False, n_objects + i, emission=le,
+                          grid=(np.asarray(light.corner, float), np.asarray(light.edge_u, float),
+                                np.asarray(light.edge_v, float)))
+            continue
+        m = np.eye(4)
+        if light.shape == "disk":
+            f = frame(light.normal)
+            m[:3, :3] = np.column_stack([f[:, 0] * light.radius, f[:, 1] * light.radius, f[:, 2]])
+            kind = L.SHAPE_DISK
+        else:
+            m[:3, :3] *= light.radius
+            kind = L.SHAPE_SPHERE
+        m[:3, 3] = light.center
+
+        def tessellated(kind=kind, m=m, i=i):
+            t = tessellate_object(kind, m, segments, True, f"lights[{i}]", "light")
+            return t.vertices, t.faces
+
+        yield Surface(n_objects + i, True, False, n_objects + i, emission=le, triangles=tessellated)
+
+
+def _plane_box(scene, bounds) -> tuple[np.ndarray, np.ndarray]:
+    """The box planes are clipped to: the compile step's bounds grown by PLANE_MARGIN, and far enough to reach
+    under the camera, so the floor in front of it is not cut off in view."""
+    lo, hi = usable_bounds(bounds)
+    grow = PLANE_MARGIN * np.maximum(hi - lo, 1e-6)
+    eye = np.asarray(scene.camera.position, np.float64)
+    return np.minimum(lo - grow, eye), np.maximum(hi + grow, eye)
+
+
+def patch_sides(scene, bounds, segments: int = 48) -> np.ndarray:
+    """int64 (2, k): the (object id, side) pairs, side +1 front and −1 back, that are patches, sorted: what a
+    solution depends on besides the scene model (`scene_digest`), found without meshing (no tessellation, no
+    cutting; a csg object's boolean mesh and a closed mesh's containment test are still needed)."""
+    pairs = set()
+    for surface in surfaces(scene, segments, *_plane_box(scene, bounds)):
+        if surface.outer:
+            pairs.add((surface.object_id, 1))
+        if surface.inner:
+            pairs.add((surface.object_id, -1))
+    return np.array(sorted(pairs), np.int64).reshape(-1, 2).T
+
+
 def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     """Patches of every object and area light of a validated `Scene` (see the module doc); `bounds` (2, 3) are
     the compile step's (`CompiledScene.bounds`), to which planes are clipped."""
     import warnings
 
-    from .csg_mesh import csg_pieces
-    from .meshprep import prepare_mesh
-    from .shapes import canonical, frame
-    from .tessellate import tessellate_object
     from .textures import mean_coefficients
     from ..errors import LumosWarning
 
-    lo, hi = usable_bounds(bounds)
     if patch_size is None:
-        patch_size = default_patch_size(lo, hi)
-    grow = PLANE_MARGIN * np.maximum(hi - lo, 1e-6)
-    plane_lo, plane_hi = lo - grow, hi + grow
-    # and far enough to reach under the camera, so the floor in front of it is not cut off in view
-    eye = np.asarray(scene.camera.position, np.float64)
-    plane_lo, plane_hi = np.minimum(plane_lo, eye), np.maximum(plane_hi, eye)
+        patch_size = default_patch_size(*usable_bounds(bounds))
+    plane_lo, plane_hi = _plane_box(scene, bounds)
     b = _Builder()
     mat_index: dict[int, int] = {}
     textured = set()
@@ -313,90 +435,18 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     def optics(material) -> np.ndarray:
         return np.array([*material.kr, *material.kt, material.ior, 1.0 if material.fresnel else 0.0])
 
-    n_groups = len(scene.objects) + len(scene.lights)  # smoothing groups: objects, area lights, then csg solids
-    for object_id, obj in enumerate(scene.objects):
-        material = scene.material_of(obj)
-        mat, rho, le = material_row(material)
-        b.optics = optics(material)
-        clear = any(c > 0 for c in material.kt)  # a transparent solid: rays inside it meet its inside
-        group = object_id
-        world = None if obj.transform is None else obj.transform.to_matrix()
-        if obj.type == "csg":  # the scan-line renderer's boolean mesh: closed, one piece per solid that shows
-            pieces = csg_pieces(scene, obj, world, segments, f"objects[{object_id}]")
-            if not pieces:
-                continue
-            offsets = np.cumsum([0] + [len(p.vertices) for p in pieces])
-            inside = _inside_mesh(np.concatenate([p.vertices for p in pieces]),
-                                  np.concatenate([p.faces + k for p, k in zip(pieces, offsets)]),
-                                  _viewpoints(scene, object_id))
-            for piece in pieces:
-                mat, rho, le = material_row(piece.material)
-                b.optics = optics(piece.material)
-                outer, inner = _sides(inside, any(c > 0 for c in piece.material.kt), scene)
-                v, t = _split_triangles(piece.vertices, piece.faces, patch_size)
-                b.add(v, t, outer, inner, rho, le, object_id, mat, n_groups, True)  # the display smooths per solid
-                n_groups += 1
-            continue
-        if obj.type in ("mesh", "triangle"):
-            m = prepare_mesh(obj, world)
-            tris = np.asarray(m.polygons, np.int64)
-            closed = obj.type == "mesh" and _closed_and_outward(m.vertices, tris)
-            outer, inner = (_sides(_inside_mesh(m.vertices, tris, _viewpoints(scene, object_id)), clear, scene)
-                            if closed else (True, True))
-            v, t = _split_triangles(m.vertices, tris, patch_size)
-            b.add(v, t, outer, inner, rho, le, object_id, mat, group, closed)
-            continue
-        kind, object_from_canonical = canonical(obj)
-        w = object_from_canonical if world is None else world @ object_from_canonical
-        if kind == L.SHAPE_BOX:
-            outer, inner = _sides(_inside_solid(kind, w, _viewpoints(scene, object_id)), clear, scene)
-            for corner, eu, ev in _box_faces(w):
-                v, q = _grid_quads(corner, eu, ev, patch_size)
-                b.add(v, q, outer, inner, rho, le, object_id, mat, group, True)
-        elif kind == L.SHAPE_RECT:
-            v, q = _grid_quads(w[:3, 3], w[:3, 0], w[:3, 1], patch_size)
-            b.add(v, q, True, True, rho, le, object_id, mat, group)
-        elif kind == L.SHAPE_PLANE:
-            corner, eu, ev = _plane_rect(w, plane_lo, plane_hi)
-            if np.dot(np.cross(eu, ev), w[:3, 2]) < 0:
-                eu, ev = ev, eu
-            v, q = _grid_quads(corner, eu, ev, patch_size)
-            b.add(v, q, True, True, rho, le, object_id, mat, group)
+    for surface in surfaces(scene, segments, plane_lo, plane_hi):
+        if surface.material is None:  # an area light: emits on its lit side, reflects nothing
+            mat, rho, le = -1, np.zeros(3), surface.emission
+            b.optics = np.zeros(8)
         else:
-            capped = getattr(obj, "capped", True)
-            closed = kind == L.SHAPE_SPHERE or (kind in (L.SHAPE_CYLINDER, L.SHAPE_CONE) and capped)
-            t = tessellate_object(kind, w, segments, capped, f"objects[{object_id}]")  # checks w first
-            outer, inner = (_sides(_inside_solid(kind, w, _viewpoints(scene, object_id)), clear, scene)
-                            if closed else (True, True))
-            v, tris = _split_triangles(t.vertices, t.faces, patch_size)
-            b.add(v, tris, outer, inner, rho, le, object_id, mat, group, closed)
-    # area lights: their emitting shapes, lit side only (the other side of a rect or disk blocks light)
-    n_objects = len(scene.objects)
-    b.optics = np.zeros(8)
-    for i, light in enumerate(scene.lights):
-        if light.type != "area":
-            continue
-        le = np.asarray(light.radiance, np.float64)
-        zero = np.zeros(3)
-        group = n_objects + i
-        if light.shape == "rect":
-            v, q = _grid_quads(np.asarray(light.corner, float), np.asarray(light.edge_u, float),
-                               np.asarray(light.edge_v, float), patch_size)
-            b.add(v, q, True, False, zero, le, n_objects + i, -1, group)
-            continue
-        if light.shape == "disk":
-            f = frame(light.normal)
-            m = np.eye(4)
-            m[:3, :3] = np.column_stack([f[:, 0] * light.radius, f[:, 1] * light.radius, f[:, 2]])
-            m[:3, 3] = light.center
-            t = tessellate_object(L.SHAPE_DISK, m, segments, True, f"lights[{i}]", "light")
+            mat, rho, le = material_row(surface.material)
+            b.optics = optics(surface.material)
+        if surface.grid is not None:
+            v, polys = _grid_quads(*surface.grid, patch_size)
         else:
-            m = np.eye(4)
-            m[:3, :3] *= light.radius
-            m[:3, 3] = light.center
-            t = tessellate_object(L.SHAPE_SPHERE, m, segments, True, f"lights[{i}]", "light")
-        v, tris = _split_triangles(t.vertices, t.faces, patch_size)
-        b.add(v, tris, True, False, zero, le, n_objects + i, -1, group)
+            v, polys = _split_triangles(*surface.triangles(), patch_size)
+        b.add(v, polys, surface.outer, surface.inner, rho, le, surface.object_id, mat, surface.group, surface.solid)
     return _assemble(b)
 
 
@@ -535,6 +585,13 @@ def attach(compiled, scene, settings) -> None:
 
     rs = settings.radiosity
     size = rs.patch_size if rs.patch_size is not None else default_patch_size(*usable_bounds(compiled.bounds))
-    compiled.patches = p = mesh_scene(scene, compiled.bounds, size, settings.tessellation)
-    sides = np.unique(np.stack([p.object_id.astype(np.int64), np.sign(p.patch_side).astype(np.int64)]), axis=1)
-    compiled.digest = scene_digest(scene, sides)
+    compiled.patches = mesh_scene(scene, compiled.bounds, size, settings.tessellation)
+    compiled.digest = scene_digest(scene, patch_sides(scene, compiled.bounds, settings.tessellation))
+
+
+def attach_digest(compiled, scene, settings) -> None:
+    """Only the digest of a compiled scene (`attach` without the patches): enough to match a saved solution,
+    which brings its own mesh, to the scene."""
+    from ..scene.digest import scene_digest
+
+    compiled.digest = scene_digest(scene, patch_sides(scene, compiled.bounds, settings.tessellation))

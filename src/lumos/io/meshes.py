@@ -100,7 +100,7 @@ def _from_trimesh(mesh) -> MeshData:
     computed ones. The loaders hand file normals to the constructor, which stores them in the mesh's cache
     under 'vertex_normals'; computed ones appear there only after the property is first read, which nothing
     has done yet on a freshly loaded mesh. So the cache entry, checked before anything else, says whether the
-    file had normals (tests/test_meshes.py checks this for every format, with and without normals).
+    file had normals (tests/io/test_meshes.py checks this for every format, with and without normals).
     """
     normals = mesh._cache.cache.get("vertex_normals")
     uvs = getattr(mesh.visual, "uv", None) if getattr(mesh.visual, "kind", None) == "texture" else None

@@ -5,10 +5,11 @@ scene it reads.
 """
 
 
-def compile_for(scene, settings):
+def compile_for(scene, settings, solved: bool = False):
     """`scene` compiled for `settings.method`: the flattened scene and its BVH (`compile.compile_scene`); for
     raster its polygons instead (`compile.compile_raster`); for path also the physical materials and the emitter
-    table (`compile.emitters.attach`); for radiosity also the patches (`compile.patches.attach`)."""
+    table (`compile.emitters.attach`); for radiosity also the patches (`compile.patches.attach`), or with
+    `solved` (a saved solution will be drawn) only the digest that matches it (`compile.patches.attach_digest`)."""
     from ..compile import compile_raster, compile_scene
 
     if settings.method == "raster":
@@ -21,5 +22,5 @@ def compile_for(scene, settings):
     elif settings.method == "radiosity":
         from ..compile import patches
 
-        patches.attach(compiled, scene, settings)
+        (patches.attach_digest if solved else patches.attach)(compiled, scene, settings)
     return compiled

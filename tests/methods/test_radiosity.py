@@ -379,9 +379,9 @@ def _blocks(a, k=8):
 def test_cornell_box_agrees_with_the_path_tracer():
     """The diffuse Cornell box against the converged path-traced image (Mitsuba's, which path matches): mean
     relative error over 8×8-pixel blocks under 5% (the issue's bar), with ~4,800 patches."""
-    from pathlib import Path
+    from helpers import DATA
 
-    ref = np.load(Path(__file__).parent / "data" / "cornell_mitsuba" / "ref_depthinf_256.npy").astype(np.float64)
+    ref = np.load(DATA / "cornell_mitsuba" / "ref_depthinf_256.npy").astype(np.float64)
     img = lumos.render(CORNELL, method="radiosity", spp=4, radiosity={"patch_size": 0.1})
     ours, theirs = _blocks(img.array.astype(np.float64)), _blocks(ref)
     lit = theirs > 1e-3
@@ -393,9 +393,9 @@ def test_cornell_box_agrees_with_the_path_tracer():
 @pytest.mark.slow
 def test_refined_cornell_box_is_within_two_percent_of_the_path_tracer():
     """The issue's second bar: where patches are refined (adaptive subdivision), within 2%."""
-    from pathlib import Path
+    from helpers import DATA
 
-    ref = np.load(Path(__file__).parent / "data" / "cornell_mitsuba" / "ref_depthinf_256.npy").astype(np.float64)
+    ref = np.load(DATA / "cornell_mitsuba" / "ref_depthinf_256.npy").astype(np.float64)
     img = lumos.render(CORNELL, method="radiosity", spp=4, radiosity={"patch_size": 0.1, "subdivide": True})
     assert img.stats["radiosity"]["elements"] > 2 * img.stats["radiosity"]["patches"]
     ours, theirs = _blocks(img.array.astype(np.float64)), _blocks(ref)
@@ -486,9 +486,9 @@ def test_cli_solve_saves_and_exports_and_render_draws_the_solution(tmp_path, cap
 def test_adaptive_subdivision_refines_where_the_radiance_varies():
     """Refining the elements of a coarse Cornell box where neighbours differ brings it closer to the converged
     path-traced image; the patches still shoot as one (elements map to the patches they refine)."""
-    from pathlib import Path
+    from helpers import DATA
 
-    ref = np.load(Path(__file__).parent / "data" / "cornell_mitsuba" / "ref_depthinf_256.npy").astype(np.float64)
+    ref = np.load(DATA / "cornell_mitsuba" / "ref_depthinf_256.npy").astype(np.float64)
     errors = {}
     for subdivide in (False, True):
         sol = solve(CORNELL, settings(patch_size=0.25, subdivide=subdivide, subdivide_levels=2))
@@ -506,12 +506,12 @@ def test_adaptive_subdivision_refines_where_the_radiance_varies():
 def test_a_mesh_file_scene_solves_and_draws(tmp_path):
     """A scene with a mesh from a file (NumPy arrays in the scene model) and an infinite plane (clipped to the
     bounds) under a point light."""
-    from pathlib import Path
+    from helpers import DATA
 
     scene = {"camera": {"position": [0, 0.15, 0.4], "look_at": [0, 0.08, 0], "fov": 40},
              "lights": [{"type": "point", "position": [0.2, 0.5, 0.3], "intensity": 0.2, "attenuation": [0, 0, 1]}],
              "objects": [{"type": "plane", "point": [0, 0.033, 0], "material": {"kd": 0.6}},
-                         {"type": "mesh", "file": str(Path(__file__).parent / "data" / "bunny_res4.ply"),
+                         {"type": "mesh", "file": str(DATA / "bunny_res4.ply"),
                           "material": {"kd": 0.8}}]}
     img = lumos.render(scene, method="radiosity", width=32, height=24, radiosity={"patch_size": 0.02})
     assert np.all(np.isfinite(img.array)) and img.array.mean() > 0.01

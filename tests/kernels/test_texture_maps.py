@@ -305,7 +305,7 @@ def test_radiosity_takes_the_mean_of_the_textures_in_order():
 
 def test_opacity_rows_read_alpha_or_raw_luminance(tmp_path):
     """A texture on kd and opacity is two rows (colour, then coverage); the coverage is the alpha channel, or
-    the raw luminance of an image without one; the material is marked MAT_CUTOUT (holes: tests/test_opacity.py)."""
+    the raw luminance of an image without one; the material is marked MAT_CUTOUT (holes: kernels/test_cutout.py)."""
     from lumos.kernels.texture import has_cutout, is_hole, material_alpha
 
     rgba = np.zeros((2, 2, 4), np.uint8)

@@ -17,11 +17,11 @@ import pytest
 
 import lumos
 from conftest import run_cli as run
+from helpers import DATA, EXAMPLES
 from lumos.errors import LumosError
 from lumos.io.models import ImportedModel
 from lumos.scene import from_model
 
-DATA = Path(__file__).parent / "data"
 BUNNY = DATA / "bunny_res4.ply"
 
 CUBE_V = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
@@ -508,14 +508,14 @@ def test_dict_scene_includes_relative_to_cwd(monkeypatch):
 
 
 def test_examples_load():
-    scene = lumos.load_scene(Path(__file__).parents[1] / "examples/models/bunny_and_shapes.yaml")
+    scene = lumos.load_scene(EXAMPLES / "models/bunny_and_shapes.yaml")
     assert [o.type for o in scene.objects] == ["rect", "mesh", "sphere", "sphere", "box"]
     assert scene.objects[1].material == "clay"
 
 
 def test_teapot_example_overrides_the_mtl_material():
     pytest.importorskip("lumos.io.obj")
-    scene = lumos.load_scene(Path(__file__).parents[1] / "examples/models/teapot.yaml")
+    scene = lumos.load_scene(EXAMPLES / "models/teapot.yaml")
     glaze = scene.materials["teapot.obj:default"]
     assert glaze.kd == (0.6, 0.1, 0.08) and glaze.texture is None  # given
     # kept from the MTL file's Ks 0.2, which shares kd + ks <= 1 with its Kd 1 (docs/formats.md, "Energy")

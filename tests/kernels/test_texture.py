@@ -333,11 +333,11 @@ def test_unreadable_image_is_a_lumos_error(tmp_path):
 
 
 def test_example_textures_load():
-    from pathlib import Path
+    from helpers import EXAMPLES
 
     from lumos.compile.textures import load_texels
 
-    folder = Path(__file__).resolve().parents[1] / "examples" / "data" / "textures"
+    folder = EXAMPLES / "data" / "textures"
     planet, bumps = load_texels(folder / "planet.png"), load_texels(folder / "bumps.png", bump=True)
     assert planet.shape == (128, 256, 3) and bumps.shape == (128, 128, 3)
     assert 0.0 <= planet.min() and planet.max() <= 1.0 and 0.2 < bumps.mean() < 0.8

@@ -279,12 +279,12 @@ def test_a_room_of_shapes_gives_each_wall_its_own_box():
     """Mitsuba's Cornell box is eight shapes (five walls, the light, two blocks): the eight fill the 8-wide root,
     one per slot. (When the SAH priced shapes as packed triangles, four went into one leaf whose box was the
     whole room, and every ray in the room tested all four.)"""
-    from pathlib import Path
+    from helpers import EXAMPLES
 
     import lumos
     from lumos.compile import compile_scene
 
-    scene = lumos.load_scene(Path(__file__).parent.parent / "examples" / "path" / "cornell.yaml")
+    scene = lumos.load_scene(EXAMPLES / "path" / "cornell.yaml")
     arrays = compile_scene(scene).arrays
     link = np.asarray(arrays.wide_link)
     counts = link[:, L.WIDE_COUNT:L.WIDE_COUNT + L.WIDE]

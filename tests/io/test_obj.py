@@ -1,7 +1,7 @@
 """OBJ + MTL import (lumos.io.obj, lumos.io.mtl): real files (tinyobjloader's edge cases, McGuire's Cornell boxes,
 trimesh's fuze) checked against trimesh's loader as a twin, smoothing groups, indices, texture options, every
 illum model's coefficients, sloppy files (warnings) and broken ones (one-line errors with the line number), a
-whitted render of an imported box (random corrupted files: test_obj_hostile.py)."""
+whitted render of an imported box (random corrupted files: io/test_obj_hostile.py)."""
 
 import math
 import shutil
@@ -13,17 +13,17 @@ import pytest
 from PIL import Image as PILImage
 
 from conftest import run_cli as run
-from helpers import check_pieces
+from helpers import DATA, ROOT, check_pieces
 
 import lumos
 from lumos.errors import LumosError
 from lumos.io.models import import_model
 from lumos.io.obj import import_obj
 
-DATA = Path(__file__).parent / "data" / "obj"
-TINY = DATA / "tinyobjloader"
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
-FILES = sorted(p for p in DATA.glob("*/*.obj") if p.name != "test-nan.obj")
+OBJ = DATA / "obj"
+TINY = OBJ / "tinyobjloader"
+SHARED = ROOT.parent / "shared" / "data"
+FILES = sorted(p for p in OBJ.glob("*/*.obj") if p.name != "test-nan.obj")
 SHARED_FILES = sorted(SHARED.glob("obj_mtl/*/*.obj")) + sorted(SHARED.glob("cornell/mcguire/*.obj"))
 CAMERA = {"position": [0, 1, 3.4], "look_at": [0, 1, 0], "fov": 40}
 
@@ -75,19 +75,19 @@ TWINS = ["tinyobjloader/cube.obj", "tinyobjloader/pbr-mat-ext.obj", "tinyobjload
 @pytest.mark.parametrize("name", TWINS)
 def test_triangle_counts_and_bounds_agree_with_trimesh(name):
     trimesh = pytest.importorskip("trimesh")
-    twin = trimesh.load(str(DATA / name), process=False, force="scene", skip_materials=True)
+    twin = trimesh.load(str(OBJ / name), process=False, force="scene", skip_materials=True)
     twin_faces = sum(len(g.faces) for g in twin.geometry.values())
-    model = import_obj(DATA / name)
+    model = import_obj(OBJ / name)
     assert all_triangles(model) == twin_faces
     np.testing.assert_allclose(bounds(model), twin.bounds, atol=1e-9)
 
 
 @pytest.mark.parametrize("name", ["tinyobjloader/cornell_box_multimaterial.obj", "mcguire/CornellBox-Original.obj"])
 def test_bounds_of_negative_index_files_are_those_of_their_vertices(name):
-    lines = [line.split() for line in (DATA / name).read_text().splitlines()]
+    lines = [line.split() for line in (OBJ / name).read_text().splitlines()]
     v = np.array([[float(x) for x in line[1:4]] for line in lines if line[:1] == ["v"]])
     # (the multimaterial box's front wall, whose face is commented out, lies within the other walls' bounds)
-    np.testing.assert_array_equal(bounds(import_obj(DATA / name)), [v.min(axis=0), v.max(axis=0)])
+    np.testing.assert_array_equal(bounds(import_obj(OBJ / name)), [v.min(axis=0), v.max(axis=0)])
 
 
 def test_cornell_multimaterial_pieces_follow_objects_and_materials():
@@ -122,9 +122,9 @@ def test_leading_zero_exponents():
 
 
 def test_texture_name_with_a_space_is_found():
-    model = import_obj(DATA / "trimesh" / "fuze.obj")
+    model = import_obj(OBJ / "trimesh" / "fuze.obj")
     texture = model.materials["a-super-duper-material"]["texture"]
-    assert Path(texture["file"]) == (DATA / "trimesh" / "fuze uv.jpg").resolve()
+    assert Path(texture["file"]) == (OBJ / "trimesh" / "fuze uv.jpg").resolve()
     assert texture["mode"] == "multiply" and texture["apply_to"] == ["kd"]
     assert "uvs" in model.objects[0]
 
@@ -348,7 +348,7 @@ def test_illum_model(tmp_path, illum):
 def test_energy_stays_at_most_one_keeping_the_ray_traced_terms(tmp_path):
     fuze = one_material(tmp_path, "Kd 1 1 1\nKs 1 1 1\nNs 20\nillum 2\n").materials["m"]
     assert fuze["kd"] == pytest.approx([0.5] * 3) and fuze["ks"] == pytest.approx([0.5] * 3)
-    mirror = import_obj(DATA / "mcguire" / "CornellBox-Mirror.obj").materials["tallBox"]
+    mirror = import_obj(OBJ / "mcguire" / "CornellBox-Mirror.obj").materials["tallBox"]
     assert mirror["kr"] == pytest.approx([0.95] * 3) and mirror["fresnel"] is True
     assert sum(mirror[k][0] for k in ("kd", "ks", "kr", "kt")) == pytest.approx(1.0)
 
@@ -360,7 +360,7 @@ def test_dissolve_blends_straight_through(tmp_path):
 
 
 def test_mcguire_illum_5_and_7():
-    materials = import_obj(DATA / "mcguire" / "CornellBox-Sphere.obj").materials
+    materials = import_obj(OBJ / "mcguire" / "CornellBox-Sphere.obj").materials
     mirror, glass = materials["leftSphere"], materials["rightSphere"]
     assert mirror["kr"] == pytest.approx([0.95] * 3) and mirror["fresnel"] and mirror["kt"] == [0.0] * 3
     assert glass["fresnel"] and glass["ior"] == 2.5 and glass["kr"] == pytest.approx([0.3] * 3)
@@ -429,9 +429,9 @@ def test_broken_mtl_numbers_are_errors_with_the_line(tmp_path):
 
 def test_missing_file_and_directory():
     with pytest.raises(LumosError, match="file not found"):
-        import_model(DATA / "nothing.obj")
+        import_model(OBJ / "nothing.obj")
     with pytest.raises(LumosError, match="cannot read the file"):
-        import_obj(DATA)
+        import_obj(OBJ)
 
 
 @pytest.mark.slow
@@ -456,13 +456,13 @@ def scene_of(model, **render) -> dict:
 @pytest.mark.parametrize("name", ["mcguire/CornellBox-Original.obj", "mcguire/CornellBox-Sphere.obj",
                                   "tinyobjloader/cornell_box_multimaterial.obj", "tinyobjloader/cube.obj"])
 def test_untextured_imports_validate_as_scenes(name):
-    scene = lumos.load_scene(scene_of(import_obj(DATA / name)))
-    assert len(scene.objects) == len(import_obj(DATA / name).objects)
+    scene = lumos.load_scene(scene_of(import_obj(OBJ / name)))
+    assert len(scene.objects) == len(import_obj(OBJ / name).objects)
 
 
 def test_textured_imports_validate_as_scenes(tmp_path):
-    lumos.load_scene(scene_of(import_obj(DATA / "trimesh" / "fuze.obj")))
-    (tmp_path / "t.png").write_bytes((DATA / "trimesh" / "fuze uv.jpg").read_bytes())
+    lumos.load_scene(scene_of(import_obj(OBJ / "trimesh" / "fuze.obj")))
+    (tmp_path / "t.png").write_bytes((OBJ / "trimesh" / "fuze uv.jpg").read_bytes())
     model = one_material(tmp_path, "Kd 1 1 1\nKs 0.5 0.5 0.5\nmap_Kd -o 0.5 0 t.png\nmap_Ks -s 2 2 t.png\n"
                                    "map_d -clamp on t.png\nmap_Ke t.png\nnorm -bm 0.5 t.png\nillum 3\n")
     scene = lumos.load_scene(scene_of(model))
@@ -472,7 +472,7 @@ def test_textured_imports_validate_as_scenes(tmp_path):
 
 
 def test_whitted_renders_an_imported_mcguire_box():
-    model = import_obj(DATA / "mcguire" / "CornellBox-Sphere.obj")
+    model = import_obj(OBJ / "mcguire" / "CornellBox-Sphere.obj")
     with warnings.catch_warnings():
         warnings.simplefilter("error", lumos.errors.LumosWarning)   # no energy warning from the materials
         image = lumos.render(lumos.load_scene(scene_of(model, method="whitted", max_depth=3)))

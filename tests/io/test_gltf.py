@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import DATA
 
 import lumos
 from lumos.errors import LumosError
@@ -18,7 +19,7 @@ from lumos.io.gltf_document import quaternion_matrix
 from lumos.io.gltf_materials import shininess
 from lumos.io.models import import_model
 
-DATA = Path(__file__).parent / "data" / "gltf"
+GLTF = DATA / "gltf"
 SPOT_MERGED = hasattr(lumos.scene.model, "SpotLight")
 MAPS_MERGED = "tangents" in lumos.scene.model.Mesh.model_fields
 needs_spot = pytest.mark.xfail(not SPOT_MERGED, reason="spot lights land with branch 'spot'", strict=False)
@@ -117,13 +118,13 @@ def box_buffer(doc: dict, accessor: int) -> np.ndarray:
 
 
 def test_box_counts_bounds_and_the_root_matrix():
-    model = import_model(DATA / "Box.gltf")
+    model = import_model(GLTF / "Box.gltf")
     (obj,) = model.objects
     assert obj["vertices"].shape == (24, 3) and obj["faces"].shape == (12, 3)
     np.testing.assert_allclose(obj["vertices"].min(0), [-0.5] * 3)
     np.testing.assert_allclose(obj["vertices"].max(0), [0.5] * 3)
     # the root node's column-major matrix [1,0,0,0, 0,0,-1,0, 0,1,0,0, 0,0,0,1]: x -> x, y -> -z, z -> y
-    doc = json.loads((DATA / "Box.gltf").read_text())
+    doc = json.loads((GLTF / "Box.gltf").read_text())
     local = box_buffer(doc, 2)
     world_from_local = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]])
     np.testing.assert_allclose(obj["vertices"], local @ world_from_local.T, atol=1e-7)
@@ -138,9 +139,9 @@ def test_box_counts_bounds_and_the_root_matrix():
 
 
 def test_box_textured_uvs_flip_v_and_the_png_is_written_once():
-    model = import_gltf(DATA / "BoxTextured.gltf")
+    model = import_gltf(GLTF / "BoxTextured.gltf")
     (obj,) = model.objects
-    doc = json.loads((DATA / "BoxTextured.gltf").read_text())
+    doc = json.loads((GLTF / "BoxTextured.gltf").read_text())
     buf = base64.b64decode(doc["buffers"][0]["uri"].split(",", 1)[1])
     uv = np.frombuffer(buf, "<f4", count=48, offset=doc["bufferViews"][2]["byteOffset"]).reshape(-1, 2)
     np.testing.assert_allclose(obj["uvs"], np.column_stack([uv[:, 0], 1 - uv[:, 1]]))
@@ -148,12 +149,12 @@ def test_box_textured_uvs_flip_v_and_the_png_is_written_once():
     assert tex["type"] == "image" and tex["wrap"] == "repeat" and sorted(tex["apply_to"]) == ["ka", "ks"]
     png = base64.b64decode(doc["images"][0]["uri"].split(",", 1)[1])
     assert Path(tex["file"]).is_absolute() and Path(tex["file"]).read_bytes() == png
-    assert import_gltf(DATA / "BoxTextured.gltf").materials["material0"]["texture"]["file"] == tex["file"]
+    assert import_gltf(GLTF / "BoxTextured.gltf").materials["material0"]["texture"]["file"] == tex["file"]
     lumos.load_scene(scene_of(model))
 
 
 def test_cameras_perspective_and_orthographic():
-    model = import_gltf(DATA / "Cameras.gltf")
+    model = import_gltf(GLTF / "Cameras.gltf")
     persp, ortho = model.cameras
     assert persp["type"] == "perspective" and persp["fov"] == pytest.approx(math.degrees(0.7))
     assert ortho["type"] == "orthographic" and ortho["size"] == pytest.approx(2.0)  # 2·ymag
@@ -520,7 +521,7 @@ def test_error_wrong_version(tmp_path):
 
 @pytest.mark.parametrize("method", ["raycast", "whitted"])
 def test_render_box_textured_shows_the_texture(method):
-    model = import_gltf(DATA / "BoxTextured.gltf")
+    model = import_gltf(GLTF / "BoxTextured.gltf")
     scene = {"camera": {"position": [1.6, 1.3, 2.2], "look_at": [0, 0, 0], "fov": 40},
              "render": {"width": 64, "height": 48}, "ambient": 0.3,
              "lights": [{"type": "point", "position": [3, 4, 5], "intensity": 0.8}],
@@ -581,7 +582,7 @@ def rich_json() -> dict:
     return doc
 
 
-BASES = [json.loads((DATA / "BoxTextured.gltf").read_text()), rich_json()]
+BASES = [json.loads((GLTF / "BoxTextured.gltf").read_text()), rich_json()]
 VALUES = st.one_of(st.integers(-3, 40), st.sampled_from([0, -1, 1e300, 2 ** 40, 0.5, None, "x", [], {}, True]),
                    st.lists(st.integers(-2, 30), max_size=17))
 

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import math
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import DATA, EXAMPLES, ROOT
 
 import lumos
 from lumos.errors import LumosError, LumosWarning
@@ -293,8 +293,8 @@ def test_gaussian_filter_keeps_the_mean():
 
 # ------------------------------------------------------------------------------------------- Mitsuba 3
 
-MITSUBA_REF = Path(__file__).parent / "data" / "cornell_mitsuba"
-CORNELL = Path(__file__).parent.parent / "examples" / "path" / "cornell.yaml"
+MITSUBA_REF = DATA / "cornell_mitsuba"
+CORNELL = EXAMPLES / "path" / "cornell.yaml"
 
 
 def _blocks(a, k=8):
@@ -326,7 +326,7 @@ def test_cornell_box_agrees_with_a_live_mitsuba():
     mi = pytest.importorskip("mitsuba")
     import sys
 
-    sys.path.insert(0, str(Path(__file__).parent.parent / "benchmarks"))
+    sys.path.insert(0, str(ROOT / "benchmarks"))
     from peers_path import mitsuba_scene_dict  # noqa: E402
 
     mi.set_variant("scalar_rgb")

@@ -1,16 +1,15 @@
 """Mesh import: each format's counts and values, normals and uvs only when the file has them, errors."""
 
 import struct
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import DATA, EXAMPLES
 
 from lumos.errors import LumosError
 from lumos.io.meshes import MeshData, load_mesh
 
-DATA = Path(__file__).parent / "data"
-EXAMPLES = Path(__file__).parent.parent / "examples" / "data"
+EXAMPLE_DATA = EXAMPLES / "data"
 
 
 def _check_types(mesh: MeshData):
@@ -150,7 +149,7 @@ def test_off(tetra):
 
 
 def test_example_bunny():
-    mesh = load_mesh(EXAMPLES / "bunny.ply")
+    mesh = load_mesh(EXAMPLE_DATA / "bunny.ply")
     assert mesh.vertices.shape == (35947, 3) and mesh.faces.shape == (69451, 3)
     assert mesh.normals is None
 

@@ -13,11 +13,11 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from helpers import EXAMPLES
 from naive import inside_solid
 from scipy import ndimage
 
@@ -29,7 +29,7 @@ from lumos.compile.csg_mesh import csg_pieces
 from lumos.compile.tessellate import tessellate_shape
 from lumos.kernels import layout as L
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "whitted"
+WHITTED = EXAMPLES / "whitted"
 PAINT = {"kd": 0.03}
 IVORY = {"kd": 0.8}
 
@@ -114,7 +114,7 @@ def test_boolean_mesh_is_closed_and_bounds_the_solid(name):
 
 
 def test_the_dice_are_closed():
-    scene = lumos.load_scene(EXAMPLES / "dice.yaml")
+    scene = lumos.load_scene(WHITTED / "dice.yaml")
     for i in (1, 2):
         obj = scene.objects[i]
         pieces = csg_pieces(scene, obj, obj.transform.to_matrix(), 48, f"objects[{i}]")
@@ -177,7 +177,7 @@ def test_cut_face_keeps_the_spheres_material_and_faces_its_centre():
 
 
 def test_nearest_csg_nodes_material():
-    scene = lumos.load_scene(EXAMPLES / "dice.yaml")
+    scene = lumos.load_scene(WHITTED / "dice.yaml")
     obj = scene.objects[1]
     for p in csg_pieces(scene, obj, obj.transform.to_matrix(), 24, "objects[1]"):
         want = "paint" if p.solid.startswith("objects[1].right") else "ivory"
@@ -188,7 +188,7 @@ def test_nearest_csg_nodes_material():
 
 
 def dice(method, **settings):
-    return lumos.render(EXAMPLES / "dice.yaml", method=method, width=160, height=120, antialias="none",
+    return lumos.render(WHITTED / "dice.yaml", method=method, width=160, height=120, antialias="none",
                         aov=["object_id", "albedo"], **settings)
 
 
@@ -220,7 +220,7 @@ def test_cli_renders_the_dice_and_the_planets_rings_with_raster(tmp_path, capsys
     for name in ("dice", "planets"):
         out = tmp_path / f"{name}.png"
         # (both scenes ask for whitted's adaptive anti-aliasing, which `lumos render` refuses for raster)
-        code = cli.main(["render", str(EXAMPLES / f"{name}.yaml"), "--method", "raster", "--antialias", "none",
+        code = cli.main(["render", str(WHITTED / f"{name}.yaml"), "--method", "raster", "--antialias", "none",
                          "--width", "160", "--height", "120", "-o", str(out), "-q"])
         assert code == 0, capsys.readouterr().err
         assert out.stat().st_size > 0

@@ -13,7 +13,7 @@
 * random rotations about the normal average the aliasing of a small patch out;
 * the parallel matrix kernel equals the single-point entry row by row.
 
-`python tests/test_hemicube.py` prints hemicubes per second (res 64 and 128, 1,000 and 10,000 quads).
+`python tests/kernels/test_hemicube.py` prints hemicubes per second (res 64 and 128, 1,000 and 10,000 quads).
 """
 
 import math

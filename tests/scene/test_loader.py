@@ -206,7 +206,7 @@ def test_not_utf8(tmp_path):
     assert error_of(path).startswith(f"{path}: not a UTF-8 text file (byte 0xff")
 
 
-def test_wrong_extension(tmp_path):  # (model files, .obj and the rest, load as a scene: tests/test_models.py)
+def test_wrong_extension(tmp_path):  # (model files, .obj and the rest, load as a scene: scene/test_from_model.py)
     path = write(tmp_path, TRIANGLE_OBJ, "bunny.txt")
     assert error_of(path).startswith(f"{path}: scene files must end in .yaml, .yml or .json")
 
