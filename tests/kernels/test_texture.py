@@ -17,7 +17,8 @@ from lumos.kernels import layout as L
 from lumos.kernels import texture as T
 from lumos.kernels.csg import CSG_PART_STRIDE
 from lumos.kernels.tangents import surface_tangents
-from lumos.kernels.texture import bump_normal, material_coeffs, noise01, texture_rgb
+from lumos.kernels.bump import bump_normal
+from lumos.kernels.texture import material_coeffs, noise01, texture_rgb
 from lumos.kernels.views import surfaces_of
 
 ORIGIN = (0.0, 0.0, 0.0)

@@ -14,6 +14,7 @@ import pytest
 from PIL import Image as PILImage
 
 import lumos
+from lumos.kernels import bump as B
 from lumos.kernels import texture as T
 from lumos.kernels.views import textures_of
 from lumos.methods import compile_for
@@ -135,7 +136,7 @@ def test_bump_lookups_without_footprint_are_the_point_ones(tmp_path):
     n, dpdu, dpdv = (0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, -1.0)
     rng = np.random.default_rng(0)
     for u, v in rng.random((20, 2)):
-        point = T.bump_normal(tex, mat, u, v, (u, 0.0, -v), n, dpdu, dpdv)
-        assert T.bump_normal_filtered(tex, mat, u, v, (u, 0.0, -v), n, dpdu, dpdv, 0.0, 0.0, 0.0, 0.0) == point
-        wide = T.bump_normal_filtered(tex, mat, u, v, (u, 0.0, -v), n, dpdu, dpdv, 0.5, 0.0, 0.0, 0.5)
+        point = B.bump_normal(tex, mat, u, v, (u, 0.0, -v), n, dpdu, dpdv)
+        assert B.bump_normal_filtered(tex, mat, u, v, (u, 0.0, -v), n, dpdu, dpdv, 0.0, 0.0, 0.0, 0.0) == point
+        wide = B.bump_normal_filtered(tex, mat, u, v, (u, 0.0, -v), n, dpdu, dpdv, 0.5, 0.0, 0.0, 0.5)
         assert wide[1] > 0.999 and wide[1] >= point[1] - 1e-12

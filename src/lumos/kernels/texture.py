@@ -4,7 +4,7 @@ illumination model.
     ka, kd, ks, kr, ke = material_coeffs(tex, mat, u, v, p)         # the textures applied in list order
     dpdu, dpdv = surface_tangents(surf, ref, part, p, n, time)     # world-space ∂p/∂u, ∂p/∂v
     dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time)  # the same, or a mesh's tangents
-    n_bumped = bump_normal(tex, mat, u, v, p, n, dpdu, dpdv)        # unit; n itself when there is no bump map
+    (bump maps: `kernels.bump`)
     hole = is_hole(tex, mat, u, v, p)                               # an opacity texture's α < ALPHA_CUTOFF
     fp = cone_footprint(surf, ref, part, p, n_geo, d, width, time)  # a ray cone's (du/dx, dv/dx, du/dy, dv/dy)
     ka, kd, ks, kr, ke = material_coeffs_filtered(tex, mat, u, v, p, *fp)       # filtered over it
@@ -80,15 +80,6 @@ point lookup of `texture_rgb` (what the ray methods use under `mipmap: false`, a
              point, whose magnitude stays below √2/2. The lattice repeats every round(scale) cells, so integer
              scales tile seamlessly across u = 0 / 1 (the sphere's seam).
 
-## Filtered bumps
-
-`bump_normal_filtered` takes the same footprint as the colour lookups (raster's, or a ray cone's): a height image's
-height comes from the mip-map level of detail λ the footprint picks (as `texture_rgb_filtered`), and its central
-differences span one texel of that level, 2^λ level-0 texels; a noise height field's differences span the
-footprint (the slope averaged over it); a normal map's texel is filtered as a colour image's (mip-mapped raw RGB,
-renormalised after the tangent frame is applied). Far away the bumps average out instead of turning into
-noise. A zero footprint is `bump_normal` exactly.
-
 ## Ray cones (the ray methods' footprint)
 
 `cone_footprint` turns a ray cone (Akenine-Möller et al. 2019, "Texture Level of Detail Strategies for Real-Time
@@ -99,16 +90,6 @@ lengthens by 1/|cos θ| on the surface) and one across it, are carried along the
 into (u, v) by the least-squares inverse of (∂p/∂u, ∂p/∂v) (`surface_tangents`). Whitted's reflected and
 transmitted rays carry the cone on, as wide as it was at the hit and spread further by the surface's curvature
 (`methods.whitted_trace`).
-
-## Bump mapping (Blinn 1978, "Simulation of wrinkled surfaces", eq. 4 without the small terms)
-
-The surface is displaced to p' = p + k·h(u, v)·n (k = strength; n unit). To first order its normal is
-
-    N' = σ·(p'_u × p'_v) = A·n + σ·k·(h_u·(n × p_v) − h_v·(n × p_u))
-
-with A = |p_u × p_v| and σ = sign(n·(p_u × p_v)), so that N' stays on n's side whichever way the uv
-parameterisation turns (bumps rise along n). `bump_normal` returns N'/|N'|. The height derivatives h_u, h_v
-are central differences over one texel (images) or 1e-3 of a pattern period (noise).
 """
 
 import math
@@ -117,9 +98,6 @@ import numpy as np
 
 from .jit import njit, njit_inline
 from .layout import (
-    FLAG_TANGENTS,
-    INFO_FLAGS,
-    MAT_BUMP,
     MAT_EMISSION,
     MAT_KA,
     MAT_KD,
@@ -129,7 +107,7 @@ from .layout import (
     MAT_TEXTURE_COUNT,
 )
 from .tangents import surface_tangents
-from .vec import cross, dot, length, normalize, orthonormal_basis
+from .vec import cross, dot, length, orthonormal_basis
 
 # tex_info columns
 TEX_KIND = 0
@@ -180,9 +158,9 @@ BUMP_NORMAL = 1
 ALPHA_CUTOFF = 0.5
 
 #: Under clamp, u and v stay below this so that the far edge of the uv square keeps the last cell's colour.
-_CLAMP_MAX = 1.0 - 1e-9
+CLAMP_MAX = 1.0 - 1e-9
 #: Finite-difference step of a noise height field, as a fraction of one pattern period.
-_NOISE_STEP = 1e-3
+NOISE_STEP = 1e-3
 _SQRT_HALF = math.sqrt(0.5)
 
 # ------------------------------------------------------------------------------------------------ lookups
@@ -193,8 +171,8 @@ def texture_rgb(tex, row, u, v, p):
     """Linear (r, g, b) of texture `row` of `tex.tex_info` at surface coordinates (u, v) (see the module doc)."""
     info = tex.tex_info[row]
     if info[TEX_WRAP] == WRAP_CLAMP:
-        u = min(max(u, 0.0), _CLAMP_MAX)
-        v = min(max(v, 0.0), _CLAMP_MAX)
+        u = min(max(u, 0.0), CLAMP_MAX)
+        v = min(max(v, 0.0), CLAMP_MAX)
     su = info[TEX_SCALE_U]
     sv = info[TEX_SCALE_V]
     s = su * u + info[TEX_SHIFT_U]
@@ -223,8 +201,8 @@ def texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy):
     if kind == TEXTURE_NOISE or (dudx == 0.0 and dvdx == 0.0 and dudy == 0.0 and dvdy == 0.0):
         return texture_rgb(tex, row, u, v, p)
     if info[TEX_WRAP] == WRAP_CLAMP:
-        u = min(max(u, 0.0), _CLAMP_MAX)
-        v = min(max(v, 0.0), _CLAMP_MAX)
+        u = min(max(u, 0.0), CLAMP_MAX)
+        v = min(max(v, 0.0), CLAMP_MAX)
     su = info[TEX_SCALE_U]
     sv = info[TEX_SCALE_V]
     if kind == TEXTURE_IMAGE:
@@ -236,7 +214,7 @@ def texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy):
         if not (longest > 1.0) or info[TEX_LEVELS] <= 1.0:  # magnified (or NaN): bilinear
             return _bilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv)
         lod = 0.5 * math.log2(longest) if longest < 1e300 else 1e9
-        return _trilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv, lod)
+        return trilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv, lod)
     # half a footprint each side: the box is one pixel wide
     fs = _odd_fraction(su * u + info[TEX_SHIFT_U], 0.5 * su * max(abs(dudx), abs(dudy)))
     if kind == TEXTURE_CHECKER:
@@ -289,7 +267,7 @@ def _bilinear_level(pixels, offset, w, h, clamp, s, t, su, sv, ou, ov):
 
 
 @njit
-def _trilinear(pixels, info, s, t, su, sv, lod):
+def trilinear(pixels, info, s, t, su, sv, lod):
     """Trilinear mip-map lookup at level of detail `lod` (> 0; see the module doc)."""
     offset = np.int64(info[TEX_OFFSET])
     w = np.int64(info[TEX_WIDTH])
@@ -474,127 +452,6 @@ def material_alpha(tex, mat, u, v, p):
 def is_hole(tex, mat, u, v, p):
     """True where the material's opacity textures cut the surface away (α < ALPHA_CUTOFF)."""
     return has_cutout(tex, mat) and material_alpha(tex, mat, u, v, p) < ALPHA_CUTOFF
-
-
-@njit_inline
-def bump_normal(tex, mat, u, v, p, n, dpdu, dpdv):
-    """The unit shading normal tilted by the material's bump map at (u, v) (Blinn 1978, see the module doc), or
-    given by its normal map (`normal_mapped`); n unchanged when the material has none, its strength is 0 (height
-    maps) or the tangents are degenerate."""
-    return bump_normal_filtered(tex, mat, u, v, p, n, dpdu, dpdv, 0.0, 0.0, 0.0, 0.0)
-
-
-@njit
-def bump_normal_filtered(tex, mat, u, v, p, n, dpdu, dpdv, dudx, dvdx, dudy, dvdy):
-    """`bump_normal` filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy) (module doc: filtered bumps); a zero
-    footprint is the point lookup."""
-    row = np.int64(mat[MAT_BUMP])
-    if row < 0:
-        return n
-    info = tex.tex_info[row]
-    if info[TEX_BUMP_TYPE] == BUMP_NORMAL:
-        return normal_mapped(tex, row, u, v, p, n, dpdu, dpdv, dudx, dvdx, dudy, dvdy)
-    strength = info[TEX_STRENGTH]
-    if strength == 0.0:
-        return n
-    lod = 0.0
-    if info[TEX_KIND] == TEXTURE_IMAGE:  # one texel (of the level the footprint picks)
-        texels = _footprint_texels(info, dudx, dvdx, dudy, dvdy)
-        if texels > 1.0:
-            lod = math.log2(texels)
-        du = min(max(texels, 1.0), info[TEX_WIDTH]) / (info[TEX_SCALE_U] * info[TEX_WIDTH])
-        dv = min(max(texels, 1.0), info[TEX_HEIGHT]) / (info[TEX_SCALE_V] * info[TEX_HEIGHT])
-    else:  # noise: the height's slope averaged over the footprint
-        du = max(_NOISE_STEP / info[TEX_SCALE_U], 0.5 * max(abs(dudx), abs(dudy)))
-        dv = max(_NOISE_STEP / info[TEX_SCALE_V], 0.5 * max(abs(dvdx), abs(dvdy)))
-    h_u = (_height(tex, row, u + du, v, p, lod) - _height(tex, row, u - du, v, p, lod)) / (2.0 * du)
-    h_v = (_height(tex, row, u, v + dv, p, lod) - _height(tex, row, u, v - dv, p, lod)) / (2.0 * dv)
-    c = cross(dpdu, dpdv)
-    area = length(c)
-    if area == 0.0:
-        return n
-    k = strength / area
-    if dot(n, c) < 0.0:
-        k = -k
-    a = cross(n, dpdv)
-    b = cross(n, dpdu)
-    bumped = normalize((n[0] + k * (h_u * a[0] - h_v * b[0]),
-                        n[1] + k * (h_u * a[1] - h_v * b[1]),
-                        n[2] + k * (h_u * a[2] - h_v * b[2])))
-    if bumped[0] == 0.0 and bumped[1] == 0.0 and bumped[2] == 0.0:
-        return n
-    return bumped
-
-
-@njit_inline
-def _footprint_texels(info, dudx, dvdx, dudy, dvdy):
-    """The longer axis of the footprint in level-0 texels of image row `info` (0 for no footprint; huge, not
-    inf, for a footprint that is)."""
-    w = info[TEX_WIDTH] * info[TEX_SCALE_U]
-    h = info[TEX_HEIGHT] * info[TEX_SCALE_V]
-    longest = max((dudx * w) ** 2 + (dvdx * h) ** 2, (dudy * w) ** 2 + (dvdy * h) ** 2)
-    if not longest < 1e300:
-        return 0.0 if longest != longest else 1e150  # NaN: no footprint
-    return math.sqrt(longest)
-
-
-@njit_inline
-def _height(tex, row, u, v, p, lod):
-    """Channel 0 of texture `row` at (u, v), from mip-map level of detail `lod` (0: level 0, bilinear)."""
-    info = tex.tex_info[row]
-    if not (lod > 0.0) or info[TEX_LEVELS] <= 1.0:
-        return texture_rgb(tex, row, u, v, p)[0]
-    if info[TEX_WRAP] == WRAP_CLAMP:
-        u = min(max(u, 0.0), _CLAMP_MAX)
-        v = min(max(v, 0.0), _CLAMP_MAX)
-    su = info[TEX_SCALE_U]
-    sv = info[TEX_SCALE_V]
-    return _trilinear(tex.tex_pixels, info, su * u + info[TEX_SHIFT_U], sv * v + info[TEX_SHIFT_V], su, sv, lod)[0]
-
-
-@njit
-def normal_mapped(tex, row, u, v, p, n, dpdu, dpdv, dudx, dvdx, dudy, dvdy):
-    """The unit normal of tangent-space normal map `row` at (u, v): texel c (raw RGB in [0, 1]) → m = 2c − 1,
-    m_x and m_y times the strength, N' = normalize(m_x·T + m_y·B + m_z·n) with T = dpdu made orthogonal to n
-    (Gram–Schmidt) and B = ±(n × T), on dpdv's side (glTF's frame: B = w·(n × T) with the tangent's
-    handedness w). n unchanged where T vanishes or N' is zero. The texel is filtered over the footprint
-    (du/dx, dv/dx, du/dy, dv/dy) as colour images are (`texture_rgb_filtered`): averaged normals, renormalised."""
-    c = texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy)
-    k = tex.tex_info[row, TEX_STRENGTH]
-    mx = k * (2.0 * c[0] - 1.0)
-    my = k * (2.0 * c[1] - 1.0)
-    mz = 2.0 * c[2] - 1.0
-    d = dot(n, dpdu)
-    t = (dpdu[0] - d * n[0], dpdu[1] - d * n[1], dpdu[2] - d * n[2])
-    lt = length(t)
-    if not lt > 0.0:
-        return n
-    t = (t[0] / lt, t[1] / lt, t[2] / lt)
-    b = cross(n, t)
-    if dot(b, dpdv) < 0.0:
-        b = (-b[0], -b[1], -b[2])
-    out = (mx * t[0] + my * b[0] + mz * n[0], mx * t[1] + my * b[1] + mz * n[1], mx * t[2] + my * b[2] + mz * n[2])
-    if length(out) == 0.0:
-        return n
-    return normalize(out)
-
-
-@njit
-def bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time):
-    """(∂p/∂u, ∂p/∂v) for the material's bump map at a hit: `surface_tangents`, except that a normal map on a
-    triangle with per-vertex tangents (FLAG_TANGENTS) takes T, the tangents interpolated by the barycentrics
-    (b1, b2), and B = w·(n × T) with the handedness w of the first vertex."""
-    row = np.int64(mat[MAT_BUMP])
-    if (ref >= 0 and row >= 0 and tex.tex_info[row, TEX_BUMP_TYPE] == BUMP_NORMAL
-            and (surf.tri_info[ref, INFO_FLAGS] & FLAG_TANGENTS) != 0):
-        g = tex.tri_tangents
-        b0 = 1.0 - b1 - b2
-        t = (b0 * g[ref, 0] + b1 * g[ref, 4] + b2 * g[ref, 8], b0 * g[ref, 1] + b1 * g[ref, 5] + b2 * g[ref, 9],
-             b0 * g[ref, 2] + b1 * g[ref, 6] + b2 * g[ref, 10])
-        w = np.float64(g[ref, 3])
-        c = cross(n, t)
-        return t, (w * c[0], w * c[1], w * c[2])
-    return surface_tangents(surf, ref, part, p, n, time)
 
 
 # ------------------------------------------------------------------------------------------------ ray cones

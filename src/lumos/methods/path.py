@@ -54,7 +54,8 @@ from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
 from ..kernels.sobol import pair_seed, sobol_block
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
-from ..kernels.texture import bump_frame, bump_normal, material_coeffs
+from ..kernels.bump import bump_frame, bump_normal
+from ..kernels.texture import material_coeffs
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .capabilities import check_settings

@@ -33,7 +33,8 @@ from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, LIGHT_SPHERE, MAT
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
 from ..kernels.surface import shading_side
-from ..kernels.texture import TEX_SIZE, bump_normal_filtered, material_coeffs_filtered
+from ..kernels.bump import bump_normal_filtered
+from ..kernels.texture import TEX_SIZE, material_coeffs_filtered
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from .common import Film, allocate_aovs, check_memory, finish, set_threads, start

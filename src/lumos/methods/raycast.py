@@ -20,7 +20,8 @@ from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_serial
 from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_SHININESS, MAT_TEXTURE
 from ..kernels.surface import shading_side, surface_at
-from ..kernels.texture import bump_frame, bump_normal_filtered, cone_footprint, material_coeffs_filtered
+from ..kernels.bump import bump_frame, bump_normal_filtered
+from ..kernels.texture import cone_footprint, material_coeffs_filtered
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
 from .common import Film, finish, run_bands, start

@@ -17,7 +17,8 @@ from ..kernels.layout import LIGHT_SPHERE, MAT_FRESNEL, MAT_BUMP, MAT_IOR, MAT_K
 from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
 from ..kernels.surface import curvature_seen, offset_origin, shading_side, surface_at
-from ..kernels.texture import bump_frame, bump_normal_filtered, cone_footprint, material_coeffs_filtered
+from ..kernels.bump import bump_frame, bump_normal_filtered
+from ..kernels.texture import cone_footprint, material_coeffs_filtered
 
 #: Secondary rays whose path weight (largest channel) is below this are not traced.
 CUTOFF = 1e-3
