@@ -193,6 +193,7 @@ def enclosure(obj, camera, look_at=(0, 0, -1)):
 SPHERE_FURNACE = enclosure({"type": "sphere", "center": [0, 0, 0], "radius": 1}, (0, 0, 0))
 
 
+@pytest.mark.slow
 def test_the_sphere_furnace_with_default_settings():
     """Issue 28's case as a user meets it: defaults (solver auto, 48 segments, the default patch size) at 48×36
     give 2.5 within 1% at every pixel (it took more than 15 minutes, and stochastic was 9% too bright: small
@@ -216,6 +217,7 @@ def test_the_sphere_furnace_every_solver(solver, form_factors):
         np.testing.assert_allclose(img.array, 2.5, rtol=0.01)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shape", ["cylinder", "torus"])
 def test_furnaces_of_other_closed_surfaces(shape):
     """A capped cylinder (flat caps meeting a curved side) and a torus given as a mesh (its inside known only by
