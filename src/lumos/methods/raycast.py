@@ -5,7 +5,7 @@ surface there is shaded by the classic model
 (`kernels.illumination.illuminate`) with no shadow rays: a surface that faces a light is lit by it (the
 textbook's simplifying assumption of ray casting). A ray that reaches an area light sees its radiance; a ray
 that hits nothing returns the background. Textures and bump maps are filtered over each camera ray's cone, one
-pixel wide (`kernels.camera.camera_cone`, `kernels.texture.cone_footprint`), unless `mipmap` is false.
+pixel wide (`kernels.camera.camera_cone`, `kernels.bump.material_in_cone`), unless `mipmap` is false.
 """
 
 from __future__ import annotations
@@ -18,10 +18,9 @@ from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_serial
-from ..kernels.layout import LIGHT_SPHERE, MAT_BUMP, MAT_SHININESS, MAT_TEXTURE
+from ..kernels.layout import LIGHT_SPHERE, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
-from ..kernels.bump import bump_frame, bump_normal_filtered
-from ..kernels.texture import cone_footprint, material_coeffs_filtered
+from ..kernels.bump import material_in_cone
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
 from .common import Film, finish, run_bands, start
@@ -38,14 +37,9 @@ def shade_hit(surf, lit, tex, geo, o, d, cone, hit, seed, pixel, sample, shadows
     p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
     mat = lit.materials[mat_id]
     V = mul(d, -1.0)
-    fp = (0.0, 0.0, 0.0, 0.0)
-    if mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0:
-        fp = cone_footprint(surf, ref, part, p, n_geo, d, abs(cone[0] + cone[1] * t), 0.0)
-    # the material's coefficients, with its textures applied
-    ka, kd, ks, kr, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
-    if mat[MAT_BUMP] >= 0.0:
-        dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n_sh, 0.0)
-        n_sh = bump_normal_filtered(tex, mat, u, v, p, n_sh, dpdu, dpdv, fp[0], fp[1], fp[2], fp[3])
+    # the material's coefficients and the shading normal, textures and bump map filtered over the ray's cone
+    ka, kd, ks, kr, ke, n_sh = material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n_sh, u, v, d,
+                                                abs(cone[0] + cone[1] * t), 0.0)
     # emitted light: two-sided for emissive materials, one-sided for rect and disk area lights
     emit = 1.0
     if light_id >= 0 and lit.light_kind[light_id] != LIGHT_SPHERE and dot(n_geo, V) < 0.0:

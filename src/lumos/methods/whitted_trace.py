@@ -13,12 +13,11 @@ from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline
-from ..kernels.layout import LIGHT_SPHERE, MAT_FRESNEL, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS, MAT_TEXTURE
+from ..kernels.layout import LIGHT_SPHERE, MAT_FRESNEL, MAT_IOR, MAT_KT, MAT_SHININESS
 from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
 from ..kernels.surface import curvature_seen, offset_origin, shading_side, surface_at
-from ..kernels.bump import bump_frame, bump_normal_filtered
-from ..kernels.texture import cone_footprint, material_coeffs_filtered
+from ..kernels.bump import material_in_cone
 
 #: Secondary rays whose path weight (largest channel) is below this are not traced.
 CUTOFF = 1e-3
@@ -213,16 +212,11 @@ def _shade(geo, surf, lit, tex, ro, rd, hit, width, time, seed, pixel, sample, s
     mat = lit.materials[mat_id]
     V = (-rd[0], -rd[1], -rd[2])
     entering = n_geo[0] * rd[0] + n_geo[1] * rd[1] + n_geo[2] * rd[2] < 0.0
-    fp = (0.0, 0.0, 0.0, 0.0)
-    if mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0:
-        fp = cone_footprint(surf, ref, hit[4], p, n_geo, rd, abs(width), time)
-    if mat[MAT_BUMP] >= 0.0:
-        dpdu, dpdv = bump_frame(surf, tex, mat, ref, hit[4], hit[2], hit[3], p, n_sh, time)
-        n_sh = bump_normal_filtered(tex, mat, u, v, p, n_sh, dpdu, dpdv, fp[0], fp[1], fp[2], fp[3])
+    # the material's coefficients and the shading normal, textures and bump map filtered over the ray's cone
+    ka, kd, ks, kr, ke, n_sh = material_in_cone(surf, tex, mat, ref, hit[4], hit[2], hit[3], p, n_geo, n_sh, u, v,
+                                                rd, abs(width), time)
     n_s = shading_side(n_sh, n_geo, V)
     n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
-    # the material's coefficients, with its textures applied
-    ka, kd, ks, kr, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
     e = (0.0, 0.0, 0.0)
     if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or entering:  # rect and disk lights: their lit side
         e = ke

@@ -320,7 +320,8 @@ def scene_from_model(model, view: str | None = None, up: str | None = None) -> t
     materials, objects = dict(model.materials), [dict(o) for o in model.objects]
     center, radius = bounding_sphere(objects)
     about = []
-    if model.cameras and view is None and up is None:
+    own_camera = bool(model.cameras) and view is None and up is None
+    if own_camera:
         camera = dict(model.cameras[0])
         about.append("the file's camera")
     else:
@@ -329,7 +330,7 @@ def scene_from_model(model, view: str | None = None, up: str | None = None) -> t
         camera = framing_camera(center, radius, direction=direction, up=camera_up)
         about.append(f"a {view or 'model-chosen'} view framing the bounds, {up} up")
     self_lit = emits(materials, objects)
-    inside = "file's camera" not in about[0] and view in (None, "front") and faces_inward(objects)
+    inside = not own_camera and view in (None, "front") and faces_inward(objects)
     if model.lights:
         lights = [dict(light) for light in model.lights]
         about.append(f"the file's {len(lights)} light{'s' if len(lights) > 1 else ''}")
