@@ -230,7 +230,7 @@ def main():
     print(f"llvmpipe frames (clear + draw + finish): {', '.join(f'{t:.3f}' for t in gl_times)} s")
 
     from lumos.io.image_files import write_image
-    from lumos.metrics import compare, diff_image
+    from lumos.tools.metrics import compare, diff_image
 
     write_image(out / "llvmpipe.png", gl_img)
     result = lumos_frames(vertices, faces, normals, W, H, args.threads, args.repeats, args.lumos_method)

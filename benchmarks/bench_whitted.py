@@ -131,9 +131,9 @@ def lumos_once(out: Path, cache: Path, width: int, height: int, threads: int, me
 
 
 def side_by_side(out: Path) -> dict:
-    """Writes povray.png | lumos.png as one image, for looking at both; returns how they differ (lumos.metrics)."""
+    """Writes povray.png | lumos.png as one image, for looking at both; returns how they differ (lumos.tools.metrics)."""
     from lumos.io.image_files import read_image, write_image
-    from lumos.metrics import compare
+    from lumos.tools.metrics import compare
 
     left, right = read_image(out / "povray.png"), read_image(out / "lumos.png")
     gap = np.ones((left.shape[0], 8, 3), np.float32)

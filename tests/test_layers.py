@@ -24,9 +24,9 @@ LAYERS = (
     ("compile: a scene to flat arrays, BVH, polygons, patches", ("compile",)),
     ("the rendering methods and radiosity's solver", ("methods", "radiosity", "denoise")),
     ("the API: render and its Image, ray queries, progress, compile-time messages",
-     ("api", "image", "queries", "interference", "jitwatch", "progress")),
+     ("api", "image", "queries", "jitwatch", "progress")),
     ("tools on top of the API and the command line",
-     ("explaining", "sheet", "sheet_drawing", "metrics", "warmup", "cli", "__main__", "__init__")),
+     ("tools", "cli", "__main__", "__init__")),
 )
 
 #: Cycles allowed, each with its reason. Remove an entry when its cycle goes; the test fails on a stale one.

@@ -4,7 +4,7 @@
 
 Each figure loads one scene (`lumos.load_scene`), renders it twice or more with one key changed (a mesh key
 set on the loaded scene, or a setting given to `lumos.render`), and puts the renders side by side with a
-caption under each. `sheet.png` is `lumos sheet` of shading.yaml, made with `lumos.sheet.make_sheet`.
+caption under each. `sheet.png` is `lumos sheet` of shading.yaml, made with `lumos.tools.sheet.make_sheet`.
 The orientation figure also checks its claim in numbers: it prints the centre pixel of each render.
 """
 
@@ -18,7 +18,7 @@ from PIL import Image, ImageDraw
 
 import lumos
 from lumos import tonemap
-from lumos.sheet import make_sheet, save_sheet
+from lumos.tools.sheet import make_sheet, save_sheet
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # examples/: the figure scripts' shared kit
 from figure_kit import font  # noqa: E402
@@ -182,7 +182,7 @@ def affine_uvs_figure():
 
 def terms_figure():
     """`lumos sheet shading.yaml --terms` for Gouraud and for Phong: ambient, diffuse, specular, and the image."""
-    from lumos.sheet import make_terms_sheet
+    from lumos.tools.sheet import make_terms_sheet
 
     panels = []
     for shading in ("gouraud", "phong"):

@@ -27,7 +27,7 @@ def __getattr__(name: str):
 
         return RayCaster
     if name == "explain":
-        from .explaining import explain
+        from .tools.explain import explain
 
         return explain
     raise AttributeError(f"module 'lumos' has no attribute {name!r}")

@@ -390,7 +390,7 @@ def _checkpointer(out: Path, every: float):
 
 
 def run_warmup(args: argparse.Namespace, started: float) -> int:
-    from . import warmup
+    from .tools import warmup
 
     try:
         families = warmup.families_for(args.methods.split(",") if args.methods else None)
@@ -414,7 +414,7 @@ def run_info(args: argparse.Namespace, started: float) -> int:
 
 
 def run_compare(args: argparse.Namespace, started: float) -> int:
-    from . import metrics
+    from .tools import metrics
     from .io.image_files import check_output_path, read_image, write_image
 
     if args.diff:
@@ -430,7 +430,7 @@ def run_compare(args: argparse.Namespace, started: float) -> int:
 
 
 def run_explain(args: argparse.Namespace, started: float) -> int:
-    from .explaining import explain, format_text
+    from .tools.explain import explain, format_text
     from .scene.loader import load_scene
 
     scene = load_scene(args.scene)
@@ -448,7 +448,7 @@ def run_explain(args: argparse.Namespace, started: float) -> int:
 
 
 def run_sheet(args: argparse.Namespace, started: float) -> int:
-    from . import sheet
+    from .tools import sheet
     from .scene.loader import load_scene
 
     out = sheet.check_sheet_path(args.output or Path(args.scene).stem + "-sheet.png")

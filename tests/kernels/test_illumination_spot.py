@@ -18,7 +18,7 @@ from lumos.compile import compile_scene, spot_cos
 from lumos.methods import compile_for
 from lumos.compile.emitters import spot_solid_angle
 from lumos.errors import LumosError
-from lumos.explaining import format_text
+from lumos.tools.explain import format_text
 from lumos.kernels import layout as L
 from lumos.kernels.illumination import spot_falloff
 

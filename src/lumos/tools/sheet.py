@@ -41,9 +41,9 @@ from typing import Iterable, Optional
 
 import numpy as np
 
-from . import api
-from .errors import LumosError
-from .io.atomic import one_line
+from .. import api
+from ..errors import LumosError
+from ..io.atomic import one_line
 from .sheet_drawing import compose_sheet, format_figures, format_seconds
 
 #: Widest default cell: a scene wider than this is rendered at this width (same aspect) unless a width is given.
@@ -171,7 +171,7 @@ def make_sheet(scene, entries: Optional[list[tuple[str, dict]]] = None, columns:
     max_abs_error; None for the reference, a cell not rendered, or without a reference) and diff_box (where
     its difference image is, or None). `sheet.info["compile_s"]` is the warm-up time.
     """
-    from .scene.loader import load_scene
+    from ..scene.loader import load_scene
 
     title = _title_of(scene) if title is None else title
     scene = load_scene(scene)
@@ -218,9 +218,9 @@ def make_terms_sheet(scene, method: str = "whitted", columns: Optional[int] = No
     transmitted) side by side, then their sum, the image. `method` is `METHOD` or `raster:SHADING`
     (`parse_reference`'s syntax); it must be raycast, raster or whitted, the methods that compute the terms.
     Returns `(sheet, cells)` as `make_sheet` (each cell's image is one term, on the render's exposure)."""
-    from .image import Image
-    from .scene.loader import load_scene
-    from .scene.model import TERM_AOVS
+    from ..image import Image
+    from ..scene.loader import load_scene
+    from ..scene.model import TERM_AOVS
 
     title = _title_of(scene) if title is None else title
     scene = load_scene(scene)
@@ -376,7 +376,7 @@ def check_sheet_path(path: str | os.PathLike) -> Path:
 
 def save_sheet(sheet, path: str | os.PathLike) -> Path:
     """Write `sheet` (a PIL image) to `path` atomically, as PNG or JPEG by its extension; returns the path."""
-    from .io.atomic import write_atomically
+    from ..io.atomic import write_atomically
 
     out = check_sheet_path(path)
     fmt = SHEET_FORMATS[out.suffix.lower()]

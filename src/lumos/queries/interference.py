@@ -16,7 +16,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from .errors import LumosError
+from ..errors import LumosError
 
 
 @dataclass

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from .errors import LumosError
+from ..errors import LumosError
 
 #: The methods that can explain a pixel.
 EXPLAINED = ("raycast", "raster", "whitted")
@@ -31,9 +31,9 @@ EXPLAINED = ("raycast", "raster", "whitted")
 
 def explain(scene, x: int, y: int, **settings) -> dict:
     """What produced pixel (x, y) (column, row from the top left) of `scene` rendered with `settings`."""
-    from .api import resolve_settings
-    from .methods import compile_for
-    from .scene.loader import load_scene
+    from ..api import resolve_settings
+    from ..methods import compile_for
+    from ..scene.loader import load_scene
 
     scene = load_scene(scene)
     method = settings.get("method")
@@ -82,7 +82,7 @@ def _v(a) -> list:
 
 
 def _per_light(rows, context) -> list:
-    from .kernels.illumination import PL_COS, PL_DIFFUSE, PL_LIT, PL_SHADOW, PL_SPECULAR, PL_SPOT
+    from ..kernels.illumination import PL_COS, PL_DIFFUSE, PL_LIT, PL_SHADOW, PL_SPECULAR, PL_SPOT
 
     out = []
     for j, row in enumerate(rows):
@@ -99,9 +99,9 @@ def _per_light(rows, context) -> list:
 
 
 def _whitted(scene, compiled, cfg, x, y, context) -> dict:
-    from .compile.camera import camera_arrays
-    from .methods import whitted as W
-    from .methods import whitted_trace as T
+    from ..compile.camera import camera_arrays
+    from ..methods import whitted as W
+    from ..methods import whitted_trace as T
 
     max_depth = cfg.resolved_max_depth()
     if max_depth is None:
@@ -142,7 +142,7 @@ def _whitted(scene, compiled, cfg, x, y, context) -> dict:
 
 
 def _whitted_node(row, lights, context) -> dict:
-    from .methods import whitted_trace as T
+    from ..methods import whitted_trace as T
 
     kind = ("camera", "reflected", "transmitted")[int(row[T.LOG_KIND])]
     node = {"kind": kind, "depth": int(row[T.LOG_DEPTH]), "origin": _v(row[T.LOG_ORIGIN:T.LOG_ORIGIN + 3]),
@@ -188,9 +188,9 @@ def _radiance(node) -> np.ndarray:
 
 
 def _raycast(scene, compiled, cfg, x, y, context) -> dict:
-    from .kernels.illumination import PER_LIGHT_SIZE
-    from .methods.raycast import render_raycast
-    from .scene.model import TERM_AOVS
+    from ..kernels.illumination import PER_LIGHT_SIZE
+    from ..methods.raycast import render_raycast
+    from ..scene.model import TERM_AOVS
 
     light_log = np.zeros((len(scene.lights), PER_LIGHT_SIZE))
     aov = ["depth", "normal", "albedo", "object_id"] + list(TERM_AOVS)
@@ -216,10 +216,10 @@ def _raycast(scene, compiled, cfg, x, y, context) -> dict:
 
 
 def _raster(scene, compiled, cfg, x, y, context) -> dict:
-    from .kernels.illumination import PER_LIGHT_SIZE
-    from .methods.common import TERM_CHANNELS, allocate_aovs
-    from .methods.raster import G_NORMAL, G_POS, G_UV, RasterFrame, view_depth
-    from .scene.model import TERM_AOVS
+    from ..kernels.illumination import PER_LIGHT_SIZE
+    from ..methods.common import TERM_CHANNELS, allocate_aovs
+    from ..methods.raster import G_NORMAL, G_POS, G_UV, RasterFrame, view_depth
+    from ..scene.model import TERM_AOVS
 
     frame = RasterFrame(compiled, scene.camera, cfg)
     mesh = frame.mesh

@@ -10,8 +10,8 @@ from typing import Iterable, Optional
 
 import numpy as np
 
-from . import tonemap
-from .errors import LumosError
+from .. import tonemap
+from ..errors import LumosError
 
 #: Columns of the grid unless asked otherwise.
 MAX_COLUMNS = 4

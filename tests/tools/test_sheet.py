@@ -19,8 +19,9 @@ from helpers import EXAMPLES
 from PIL import Image as PILImage
 
 import lumos
-from lumos import api, cli, sheet, tonemap
-from lumos import sheet_drawing as drawing
+from lumos import api, cli, tonemap
+from lumos.tools import sheet
+from lumos.tools import sheet_drawing as drawing
 from lumos.errors import LumosError
 from lumos.methods.common import Film
 
@@ -382,7 +383,7 @@ def test_reference_syntax():
 
 
 def test_figures_are_the_metrics_of_each_cell_against_the_reference(fakes, tiny):
-    from lumos import metrics
+    from lumos.tools import metrics
 
     _, cells = sheet.make_sheet(tiny, reference="raster:gouraud", warm_up=False)
     ref = cells[1]
@@ -433,7 +434,7 @@ def test_captions_get_a_figures_line(capsys, fakes, tiny, tmp_path):
 @pytest.mark.parametrize("reference, columns, diff_rows", [("ramp", 3, [0]), ("raster:flat", 3, [0, 1]),
                                                             ("raster:flat", None, [0]), ("raster:flat", 1, [1, 2, 3])])
 def test_diff_adds_rows_of_difference_images_on_one_scale(fakes, tiny, reference, columns, diff_rows):
-    from lumos import metrics
+    from lumos.tools import metrics
 
     plain, plain_cells = sheet.make_sheet(tiny, columns=columns, reference=reference, warm_up=False)
     image, cells = sheet.make_sheet(tiny, columns=columns, reference=reference, diff=True, warm_up=False)

@@ -96,14 +96,14 @@ def _box() -> dict:
 
 
 def _render(scene: dict, method: str, **settings) -> None:
-    from . import api
+    from .. import api
 
     api.render(scene, method=method, progress=False, **{**SMALL, **settings})
 
 
 def _warm_bvh() -> None:
-    from .compile import compile_scene
-    from .scene.loader import load_scene
+    from ..compile import compile_scene
+    from ..scene.loader import load_scene
 
     compile_scene(load_scene(_scene()))
 
@@ -144,7 +144,7 @@ def _warm_radiosity() -> None:
 def _warm_queries() -> None:
     import numpy as np
 
-    from .queries import RayCaster
+    from ..queries import RayCaster
 
     rc = RayCaster(_scene())
     rng = np.random.default_rng(0)
@@ -174,7 +174,7 @@ class FamilyResult:
 
 def warm_family(family: str) -> FamilyResult:
     """Run one family's warm-up in this process; returns what it compiled."""
-    from .jitwatch import watch_compiles
+    from ..jitwatch import watch_compiles
 
     t0 = time.perf_counter()
     try:
@@ -207,8 +207,8 @@ def run(families: Optional[Iterable[str]] = None, jobs: Optional[int] = None,
         on_start: Optional[Callable[[str], None]] = None) -> list[FamilyResult]:
     """Warm `families` (default: all): the FIRST ones, then the rest in `jobs` processes (default: one per core;
     1 = in this process, one after the other). Returns one result per family, in FAMILIES's order."""
-    from .jitwatch import read_timings, save_timings
-    from .kernels.cache import cache_dirs
+    from ..jitwatch import read_timings, save_timings
+    from ..kernels.cache import cache_dirs
 
     names = families_for(families)
     jobs = max(1, jobs or os.cpu_count() or 1)
@@ -252,7 +252,7 @@ def main(methods: Optional[list[str]] = None, jobs: Optional[int] = None, quiet:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .kernels.cache import cache_dirs
+    from ..kernels.cache import cache_dirs
 
     names = families_for(methods)
     console = Console(file=sys.stderr, quiet=quiet)

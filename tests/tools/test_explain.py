@@ -12,7 +12,7 @@ import pytest
 
 import lumos
 from lumos import cli
-from lumos.explaining import format_text
+from lumos.tools.explain import format_text
 
 CLASSIC = "examples/whitted/classic.yaml"
 SMALL = {"width": 160, "height": 120}

@@ -22,7 +22,7 @@ from typing import NamedTuple, Union
 
 import numpy as np
 
-from .errors import LumosError
+from ..errors import LumosError
 from .interference import Interference, measure_interference
 
 _SCENE_FILES = (".yaml", ".yml", ".json")
@@ -68,7 +68,7 @@ class Segments(NamedTuple):
 
 def _load(scene):
     """A validated `Scene` from a Scene, a dict, a scene file or a bare mesh file."""
-    from .scene import Scene, load_scene
+    from ..scene import Scene, load_scene
 
     if isinstance(scene, Scene):
         return load_scene(scene)  # completes a Scene built in Python (mesh files, includes)
@@ -76,7 +76,7 @@ def _load(scene):
         path = Path(scene)
         ext = path.suffix.lower()
         if ext not in _SCENE_FILES:
-            from .io.models import MODEL_FORMATS, import_model
+            from ..io.models import MODEL_FORMATS, import_model
 
             if ext not in MODEL_FORMATS:
                 raise LumosError(f"{scene}: not a scene ({', '.join(_SCENE_FILES)}) or model file "
@@ -92,8 +92,8 @@ class RayCaster:
     holes of opacity cut-outs, which the renderers look through, are hit here."""
 
     def __init__(self, scene):
-        from .compile import compile_scene
-        from .kernels import layout as L
+        from ..compile import compile_scene
+        from ..kernels import layout as L
 
         self.scene = _load(scene)
         self._compiled = compile_scene(self.scene.model_copy(update={"lights": []}))
@@ -173,7 +173,7 @@ class RayCaster:
 
     def closest(self, origins, directions, t_max=np.inf) -> Hits:
         """Nearest hit with 0 < t < t_max of each ray (t_max a number or (n,))."""
-        from .kernels.queries import closest_kernel
+        from ..kernels.queries import closest_kernel
 
         o, d = _rays(origins, directions)
         t_max = _t_max(t_max, len(o))
@@ -185,7 +185,7 @@ class RayCaster:
 
     def occluded(self, origins, directions, t_max=np.inf) -> np.ndarray:
         """(n,) bool: does anything lie on ray i with 0 < t < t_max[i] (shadow and visibility tests)."""
-        from .kernels.batch import trace_any
+        from ..kernels.batch import trace_any
 
         o, d = _rays(origins, directions)
         t_max = _t_max(t_max, len(o))
@@ -202,7 +202,7 @@ class RayCaster:
         return self._crossings(o, d, _t_min(t_min, len(o)), _t_max(t_max, len(o)), int(max_hits))
 
     def _crossings(self, o, d, t_min, t_max, max_hits) -> Crossings:
-        from .kernels.queries import crossings
+        from ..kernels.queries import crossings
 
         n = len(o)
         parts, counts, truncated = [], np.zeros(n, np.int64), np.zeros(n, bool)
@@ -282,7 +282,7 @@ class RayCaster:
                else [self._solid_id(x, "contains(object=...)") for x in objects])
         sel = np.zeros(len(self.names), bool)
         sel[[i for i in ids if self._solid[i]]] = True
-        from .kernels.queries import containing_kernel
+        from ..kernels.queries import containing_kernel
 
         n = len(p)
         col = np.full(len(self.names), -1)
@@ -354,8 +354,8 @@ class RayCaster:
         """(origins, directions) float64 (n, 3) of the camera rays through pixel centres (x, y) (numbers or
         arrays; row 0 at the top) of a width × height image (default: the scene's render size), as the
         renderers cast them (DESIGN.md §3; a thin lens' ray through the lens centre)."""
-        from .compile.camera import camera_arrays
-        from .kernels.queries import camera_rays_kernel
+        from ..compile.camera import camera_arrays
+        from ..kernels.queries import camera_rays_kernel
 
         width = self.scene.render.width if width is None else int(width)
         height = self.scene.render.height if height is None else int(height)
@@ -393,7 +393,7 @@ def _rays(origins, directions):
     if len(o) != len(d) and 1 not in (len(o), len(d)):
         raise LumosError(f"origins and directions: {len(o)} origins but {len(d)} directions")
     o, d = (np.ascontiguousarray(a) for a in np.broadcast_arrays(o, d))
-    from .kernels.queries import bad_rays
+    from ..kernels.queries import bad_rays
 
     bad_o, bad_d, zero = bad_rays(o, d)
     for bad, arr, what in ((bad_o, o, "origins"), (bad_d, d, "directions")):
@@ -459,8 +459,8 @@ def _open_edges(obj) -> int:
 def _object_bounds(sa, n_obj) -> np.ndarray:
     """float64 (n_obj, 2, 3): world bounds of each object (its triangles and canonical shapes; a csg object's
     solids' union), +-inf where it has none (planes)."""
-    from .compile.shapes import world_bounds
-    from .kernels import layout as L
+    from ..compile.shapes import world_bounds
+    from ..kernels import layout as L
 
     lo = np.full((n_obj, 3), np.inf)
     hi = np.full((n_obj, 3), -np.inf)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from lumos.errors import LumosError
-from lumos.metrics import compare, diff_image, error_map, heat_ramp
+from lumos.tools.metrics import compare, diff_image, error_map, heat_ramp
 
 
 def test_identical_images():

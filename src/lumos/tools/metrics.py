@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .errors import LumosError
+from ..errors import LumosError
 
 #: Added to |reference| in the relative error so dark pixels do not blow it up (as in Rousselle et al.'s relMSE).
 REL_EPSILON = 1e-2
