@@ -14,6 +14,17 @@ ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data"
 EXAMPLES = ROOT / "examples"
 
+#: The smallest lit scene, as YAML text: one Lambert sphere under one point light, 32 × 24 (test_cli.py,
+#: tools/test_sheet.py).
+TINY = """\
+camera: {position: [0, 0, 4], look_at: [0, 0, 0], fov: 40}
+render: {width: 32, height: 24}
+lights:
+  - {type: point, position: [2, 3, 4], intensity: 1}
+objects:
+  - {type: sphere, center: [0, 0, 0], radius: 1, material: {kd: 0.8}}
+"""
+
 
 #: Lights and camera of the textured scenes that raster and raycast draw alike (methods/test_raster_textures.py,
 #: kernels/test_texture_maps.py).

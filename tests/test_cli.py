@@ -10,17 +10,10 @@ import numpy as np
 import pytest
 
 from conftest import run_cli as run
+from helpers import TINY
 from lumos import cli
 from lumos.errors import LumosError
 
-TINY = """\
-camera: {position: [0, 0, 4], look_at: [0, 0, 0], fov: 40}
-render: {width: 32, height: 24}
-lights:
-  - {type: point, position: [2, 3, 4], intensity: 1}
-objects:
-  - {type: sphere, center: [0, 0, 0], radius: 1, material: {kd: 0.8}}
-"""
 
 
 @pytest.fixture

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from helpers import EXAMPLES
+from helpers import EXAMPLES, TINY
 from PIL import Image as PILImage
 
 import lumos
@@ -25,14 +25,6 @@ from lumos.tools import sheet_drawing as drawing
 from lumos.errors import LumosError
 from lumos.methods.common import Film
 
-TINY = """\
-camera: {position: [0, 0, 4], look_at: [0, 0, 0], fov: 40}
-render: {width: 32, height: 24}
-lights:
-  - {type: point, position: [2, 3, 4], intensity: 1}
-objects:
-  - {type: sphere, center: [0, 0, 0], radius: 1, material: {kd: 0.8}}
-"""
 #: Grey level of the fake raster per shading, and of the second fake method.
 LEVELS = {("raster", "flat"): 0.1, ("raster", "gouraud"): 0.3, ("raster", "phong"): 0.9, ("ramp", None): 0.6}
 
