@@ -3,6 +3,7 @@
 Importing this module does no work (Mitsuba and bpy are imported on first use). The functions:
 
     mitsuba_scene_dict(spp, max_depth, width, height)  Mitsuba's `mi.cornell_box()` as lumos renders it
+                                                       (lamp_reflects=True: with its own reflecting lamp)
     mitsuba_render(variant, spp, max_depth, ...)       -> (float32 (H, W, 3) image, seconds), warm, 2 threads
     cycles_render(spp, max_depth, ...)                 -> (image, seconds), the same scene in Blender Cycles
     reference(spp, max_depth, ..., path)               a converged Mitsuba image, cached as EXR in .cache/
@@ -14,8 +15,10 @@ lumos's `max_depth` and Cycles' `max_bounces` count bounces after the first hit:
 
 The scene (`examples/path/cornell.yaml` is the same in lumos's format): `mi.cornell_box()` unchanged except
   - a box pixel filter (`{"type": "box"}`; Mitsuba's default there is a Gaussian) = lumos's and Cycles' BOX 1.0;
-  - the light rectangle's BSDF is black (Mitsuba gives it the white diffuse BSDF, but a lumos area light does not
-    reflect, and the Cycles light here does not either), so all three render the same scene;
+  - the light rectangle's BSDF is black (Mitsuba gives it the white diffuse BSDF; cornell.yaml's lamp has no
+    `material`, and the Cycles light here does not reflect either), so all three render the same scene; with
+    `lamp_reflects=True` (mitsuba_scene_dict, mitsuba_render, render_reference, reference) it keeps Mitsuba's own
+    white diffuse BSDF, for comparing a lamp that reflects (tests/data/cornell_mitsuba/ref_lamp_*.npy);
   - spp, max_depth, width and height as asked (the camera keeps fov 39.3077° on the smaller axis).
 
 Threads: every render uses `threads` (default 2) worker threads. Mitsuba's scalar and LLVM variants both run on
@@ -100,13 +103,17 @@ def mitsuba_version() -> str:
     return f"Mitsuba {mi.__version__}"
 
 
-def mitsuba_scene_dict(spp: int = 64, max_depth: int = DEPTH, width: int = 256, height: int = 256) -> dict:
-    """`mi.cornell_box()` with a box filter, a black BSDF on the light and these settings (a variant must be set)."""
+def mitsuba_scene_dict(spp: int = 64, max_depth: int = DEPTH, width: int = 256, height: int = 256,
+                       lamp_reflects: bool = False) -> dict:
+    """`mi.cornell_box()` with a box filter, a black BSDF on the light and these settings (a variant must be set).
+
+    lamp_reflects: keep `mi.cornell_box()`'s own BSDF on the light (the white diffuse one) instead of the black."""
     import mitsuba as mi
 
     d = mi.cornell_box()
     d["integrator"] = {"type": "path", "max_depth": int(max_depth)}
-    d["light"]["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}
+    if not lamp_reflects:
+        d["light"]["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}
     sensor = d["sensor"]
     sensor["sampler"] = {"type": "independent", "sample_count": int(spp)}
     sensor["film"]["width"], sensor["film"]["height"] = int(width), int(height)
@@ -114,20 +121,22 @@ def mitsuba_scene_dict(spp: int = 64, max_depth: int = DEPTH, width: int = 256, 
     return d
 
 
-_mi_scenes: dict = {}  # (variant, max_depth, width, height) -> loaded scene
+_mi_scenes: dict = {}  # (variant, max_depth, width, height[, "lamp"]) -> loaded scene
 _warm: set = set()  # configurations rendered once already
 
 
 def mitsuba_render(variant: str = "llvm_ad_rgb", spp: int = 64, max_depth: int = DEPTH, width: int = 256,
-                   height: int = 256, seed: int | None = None, threads: int = 2, warm: bool = True):
+                   height: int = 256, seed: int | None = None, threads: int = 2, warm: bool = True,
+                   lamp_reflects: bool = False):
     """Render the Cornell box with Mitsuba; returns (float32 (H, W, 3) linear image, seconds of the render).
 
-    warm: render once untimed first, the first time this configuration is asked for (see the module docstring)."""
+    warm: render once untimed first, the first time this configuration is asked for (see the module docstring).
+    lamp_reflects: the light keeps mi.cornell_box()'s white diffuse BSDF (see mitsuba_scene_dict)."""
     mi, dr = _mitsuba(variant)
     dr.set_thread_count(threads)
-    key = (variant, int(max_depth), int(width), int(height))
+    key = (variant, int(max_depth), int(width), int(height)) + (("lamp",) if lamp_reflects else ())
     if key not in _mi_scenes:
-        _mi_scenes[key] = mi.load_dict(mitsuba_scene_dict(spp, max_depth, width, height))
+        _mi_scenes[key] = mi.load_dict(mitsuba_scene_dict(spp, max_depth, width, height, lamp_reflects))
     scene = _mi_scenes[key]
     # LLVM: a new spp can mean new kernels (e.g. 17 after 16), so each spp is warmed; scalar: once per scene
     wkey = (key, int(spp)) if variant.startswith("llvm") else key
@@ -382,19 +391,22 @@ def _cycles_pixels() -> np.ndarray:
 # ---------------------------------------------------------------------------------------------------- reference
 
 
-def reference_path(spp: int, max_depth: int = DEPTH, width: int = 256, height: int = 256) -> Path:
+def reference_path(spp: int, max_depth: int = DEPTH, width: int = 256, height: int = 256,
+                   lamp_reflects: bool = False) -> Path:
     depth = "inf" if max_depth < 0 else str(max_depth)
-    return CACHE / f"cornell_mitsuba_depth{depth}_{width}x{height}_{spp}spp.exr"
+    lamp = "_lamp" if lamp_reflects else ""
+    return CACHE / f"cornell_mitsuba{lamp}_depth{depth}_{width}x{height}_{spp}spp.exr"
 
 
 def render_reference(spp: int = 16384, max_depth: int = DEPTH, width: int = 256, height: int = 256,
                      variant: str = "llvm_ad_rgb", threads: int = 2, pass_spp: int = 256, seed: int = 1_000_000,
-                     verbose: bool = False):
+                     verbose: bool = False, lamp_reflects: bool = False):
     """A converged Mitsuba image: the mean of spp/pass_spp renders of pass_spp samples each, with seeds seed,
     seed+1, ... (independent sampler, so this is the same estimator as one render of spp samples; passes keep the
     LLVM variant's wavefront small). Returns (float32 (H, W, 3) image, seconds of rendering in all, noise), where
     noise estimates the image's own RMSE against the exact one: RMSE(mean of the even passes, mean of the odd
-    passes) / 2, since each half has twice the variance of the whole and their difference four times."""
+    passes) / 2, since each half has twice the variance of the whole and their difference four times.
+    lamp_reflects: the light keeps mi.cornell_box()'s white diffuse BSDF (see mitsuba_scene_dict)."""
     if spp % pass_spp or spp // pass_spp < 2:
         raise ValueError(f"spp {spp} must be a multiple of pass_spp {pass_spp}, at least twice it")
     passes = spp // pass_spp
@@ -402,7 +414,7 @@ def render_reference(spp: int = 16384, max_depth: int = DEPTH, width: int = 256,
     total = 0.0
     for i in range(passes):
         img, s = mitsuba_render(variant, pass_spp, max_depth, width, height, seed=seed + i, threads=threads,
-                                warm=False)
+                                warm=False, lamp_reflects=lamp_reflects)
         halves[i % 2] += img
         total += s
         if verbose:
@@ -413,26 +425,30 @@ def render_reference(spp: int = 16384, max_depth: int = DEPTH, width: int = 256,
 
 
 def reference(spp: int = 16384, max_depth: int = DEPTH, width: int = 256, height: int = 256,
-              path: str | os.PathLike | None = None, variant: str = "llvm_ad_rgb", verbose: bool = False) -> np.ndarray:
+              path: str | os.PathLike | None = None, variant: str = "llvm_ad_rgb", verbose: bool = False,
+              lamp_reflects: bool = False) -> np.ndarray:
     """The converged Mitsuba image of the Cornell box (float32 (H, W, 3)), from the cache if there.
 
     path: the EXR to read or write (default benchmarks/.cache/cornell_mitsuba_depth{D}_{W}x{H}_{spp}spp.exr).
     When no path is given, 256×256 at depth 8 or unbounded is asked and the cache is empty, the stored references of
     tests/data/cornell_mitsuba/ (made by benchmarks/make_path_reference.py) are used if they have at least `spp`
     samples; otherwise it is rendered with render_reference (depth 8, 16384 spp: about 4 minutes on two cores
-    with llvm_ad_rgb; unbounded twice that) and written to `path`."""
+    with llvm_ad_rgb; unbounded twice that) and written to `path`. lamp_reflects: the light keeps
+    mi.cornell_box()'s white diffuse BSDF (see mitsuba_scene_dict; stored: ref_lamp_*.npy)."""
     from lumos.io.image_files import read_image, write_image
 
-    out = Path(path) if path is not None else reference_path(spp, max_depth, width, height)
+    out = Path(path) if path is not None else reference_path(spp, max_depth, width, height, lamp_reflects)
     if out.is_file():
         return read_image(out)
-    stored = None if path is not None else stored_reference(max_depth, width, height, min_spp=spp)
+    stored = None if path is not None else stored_reference(max_depth, width, height, min_spp=spp,
+                                                            lamp_reflects=lamp_reflects)
     if stored is not None:
         return stored
     if verbose:
         print(f"rendering the Mitsuba reference ({variant}, {spp} spp, max_depth {max_depth}, {width}x{height}) "
               f"into {out}", flush=True)
-    img, _, _ = render_reference(spp, max_depth, width, height, variant, verbose=verbose)
+    img, _, _ = render_reference(spp, max_depth, width, height, variant, verbose=verbose,
+                                 lamp_reflects=lamp_reflects)
     out.parent.mkdir(parents=True, exist_ok=True)
     write_image(out, img)
     return img
@@ -441,9 +457,11 @@ def reference(spp: int = 16384, max_depth: int = DEPTH, width: int = 256, height
 STORED = ROOT / "tests" / "data" / "cornell_mitsuba"
 
 
-def stored_reference(max_depth: int = DEPTH, width: int = 256, height: int = 256, min_spp: int = 0):
+def stored_reference(max_depth: int = DEPTH, width: int = 256, height: int = 256, min_spp: int = 0,
+                     lamp_reflects: bool = False):
     """The reference stored in tests/data/cornell_mitsuba/ for this depth and size (None if there is none, or it
-    has fewer than min_spp samples). Its sample count is in that folder's info.json."""
+    has fewer than min_spp samples). Its sample count is in that folder's info.json; its entries' "lamp" is
+    "white" for the references whose light keeps Mitsuba's reflecting BSDF (lamp_reflects), else absent/"black"."""
     import json
 
     info = STORED / "info.json"
@@ -451,6 +469,6 @@ def stored_reference(max_depth: int = DEPTH, width: int = 256, height: int = 256
         return None
     for entry in json.loads(info.read_text()).get("files", []):
         if (entry["max_depth"] == max_depth and entry["width"] == width and entry["height"] == height
-                and entry["spp"] >= min_spp):
+                and entry["spp"] >= min_spp and (entry.get("lamp", "black") == "white") == lamp_reflects):
             return np.load(STORED / entry["file"]).astype(np.float32)
     return None

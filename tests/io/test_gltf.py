@@ -358,6 +358,18 @@ def test_transmission_ior_and_emissive_strength(tmp_path):
     lumos.load_scene(scene_of(model))
 
 
+@pytest.mark.parametrize("double_sided", [None, False, True])
+def test_emissive_materials_emit_on_the_front_unless_double_sided(tmp_path, double_sided):
+    """glTF: a material that is not doubleSided has a front only; its objects emit from it (`two_sided: false`)."""
+    material = {"emissiveFactor": [1, 1, 1]}
+    if double_sided is not None:
+        material["doubleSided"] = double_sided
+    _, model = material_of(tmp_path, material)
+    assert model.objects[0].get("two_sided", True) is bool(double_sided)
+    _, plain = material_of(tmp_path, {"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1]}})
+    assert "two_sided" not in plain.objects[0]  # (a surface that does not emit reflects on both sides regardless)
+
+
 def test_blend_alpha_is_a_see_through_share(tmp_path):
     mat, model = material_of(tmp_path, {"alphaMode": "BLEND", "pbrMetallicRoughness": {
         "baseColorFactor": [1, 1, 1, 0.25], "metallicFactor": 0}})

@@ -90,6 +90,17 @@ def test_bounds_of_negative_index_files_are_those_of_their_vertices(name):
     np.testing.assert_array_equal(bounds(import_obj(OBJ / name)), [v.min(axis=0), v.max(axis=0)])
 
 
+def test_emissive_parts_emit_on_the_side_their_faces_wind_to():
+    """A part whose material has Ke emits on its counter-clockwise side only (`two_sided: false`), as Mitsuba and
+    pbrt read area lights: McGuire's lamp faces down, into the box, and no light leaks into the gap above it."""
+    model = import_obj(OBJ / "mcguire" / "CornellBox-Original.obj")
+    sides = {o["name"]: o.get("two_sided", True) for o in model.objects}
+    assert sides.pop("light") is False and all(sides.values())
+    lamp = next(o for o in model.objects if o["name"] == "light")
+    v = lamp["vertices"][lamp["faces"][0]]
+    assert np.cross(v[1] - v[0], v[2] - v[0])[1] < 0  # its front is down
+
+
 def test_cornell_multimaterial_pieces_follow_objects_and_materials():
     model = import_obj(TINY / "cornell_box_multimaterial.obj")
     names = [(o["name"], o["material"]) for o in model.objects]

@@ -273,6 +273,40 @@ def test_the_parallel_squares_with_default_settings():
             assert img.array[..., 0].mean() == pytest.approx(0.6 * 0.19982, rel=0.01), (solver, display)
 
 
+def _receiver_mean(scene, solver="gauss_seidel"):
+    sol = solve(scene, settings(solver=solver, form_factors="raycast", patch_size=0.1, tolerance=1e-5))
+    up = (sol.element_object == 0) & (sol.element_normal[:, 1] > 0.5)
+    return (sol.element_radiance[up, 0] * sol.element_area[up]).sum() / sol.element_area[up].sum(), sol
+
+
+@pytest.mark.parametrize("facing_down, two_sided", [(True, False), (False, False), (False, True), (True, True)])
+def test_one_sided_emissive_objects(facing_down, two_sided):
+    """The parallel squares with the emitter an emissive rect object: facing the receiver, or two-sided, the
+    receiver gets ρ·F·Le; one-sided and turned away, nothing (its back is a reflector of kd 0)."""
+    rho, le = 0.7, 2.0
+    eu, ev = ([1, 0, 0], [0, 0, 1]) if facing_down else ([0, 0, 1], [1, 0, 0])  # cross(eu, ev) = -y or +y
+    emitter = {"type": "rect", "corner": [0, 1, 0], "edge_u": eu, "edge_v": ev, "two_sided": two_sided,
+               "material": {"kd": 0.0, "emission": le}}
+    scene = {"objects": [square([0, 0, 1], [1, 0, 0], [0, 0, -1], {"kd": rho}), emitter]}
+    mean, _ = _receiver_mean(scene)
+    expected = rho * 0.19982 * le if facing_down or two_sided else 0.0
+    assert mean == pytest.approx(expected, rel=0.01, abs=1e-9)
+
+
+@pytest.mark.parametrize("solver", ["gauss_seidel", "progressive"])
+def test_an_area_light_with_a_material_reflects(solver):
+    """The parallel squares, the rect light given kd ρ_l: light goes back and forth between the two, so the
+    receiver's radiance is ρ·F·Le / (1 − ρ·ρ_l·F²) (equal squares: F both ways), 2.3% over the bare light's."""
+    rho, rho_l, le, f = 0.7, 0.8, 2.0, 0.19982
+    scene = {"lights": [{"type": "area", "shape": "rect", "corner": [0, 1, 0], "edge_u": [1, 0, 0],
+                         "edge_v": [0, 0, 1], "radiance": le, "material": {"kd": rho_l}}],
+             "objects": [square([0, 0, 1], [1, 0, 0], [0, 0, -1], {"kd": rho})]}
+    mean, sol = _receiver_mean(scene, solver)
+    assert mean == pytest.approx(rho * f * le / (1 - rho * rho_l * f * f), rel=0.005)
+    lamp = (sol.element_object == 1) & (sol.element_normal[:, 1] < -0.5)  # its lit side, facing down
+    assert np.all(sol.element_radiance[lamp, 0] > le)
+
+
 CORNELL = "examples/path/cornell.yaml"
 
 

@@ -366,3 +366,26 @@ def test_antialias_settings_of_raycast():
         render(scene, width=8, height=6, antialias="adaptive")
     with pytest.raises(lumos.LumosError, match="adaptive"):
         render(scene, method="raster", width=8, height=6, antialias="adaptive")
+
+
+@pytest.mark.parametrize("method", ["raycast", "whitted", "raster"])
+def test_one_sided_emitters_show_their_emission_on_the_front_only(method):
+    """An emissive rect with `two_sided: false`, and a rect area light, seen from the side their normal faces show
+    their emission, from behind nothing; two-sided, both sides show it (every local method, the same rule)."""
+
+    def centre(facing_camera: bool, two_sided: bool, light: bool) -> np.ndarray:
+        # cross(edge_u, edge_v) is +z (towards the camera) or -z
+        eu, ev = ([1, 0, 0], [0, 1, 0]) if facing_camera else ([0, 1, 0], [1, 0, 0])
+        panel = {"corner": [-0.5, -0.5, 0], "edge_u": eu, "edge_v": ev, "two_sided": two_sided}
+        scene = {"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 30},
+                 "render": {"width": 16, "height": 16, "method": method}}
+        if light:
+            scene["lights"] = [{"type": "area", "shape": "rect", "radiance": [2, 3, 4], **panel}]
+        else:
+            scene["objects"] = [{"type": "rect", "material": {"kd": 0, "emission": [2, 3, 4]}, **panel}]
+        return lumos.render(scene).array[8, 8]
+
+    for light in (False, True):
+        np.testing.assert_allclose(centre(True, False, light), [2, 3, 4], rtol=1e-6)
+        np.testing.assert_array_equal(centre(False, False, light), [0, 0, 0])
+        np.testing.assert_allclose(centre(False, True, light), [2, 3, 4], rtol=1e-6)

@@ -137,6 +137,16 @@ BAD_SCENES = [
      ["materials.m.kd[1]: must be at least 0, got -1"]),
     ("unknown_material", "materials:\n  red: {kd: 1}\nobjects:\n  - type: sphere\n  - type: sphere\n"
      "    material: gold\n", 6, ["objects[1].material: unknown material 'gold' (defined: red)"]),
+    ("light_unknown_material", "materials:\n  red: {kd: 1}\nlights:\n  - {type: point, position: [0, 1, 0]}\n"
+     "  - type: area\n    shape: disk\n    center: [0, 1, 0]\n    normal: [0, -1, 0]\n    radius: 1\n"
+     "    material: gold\n", 10, ["lights[1].material: unknown material 'gold' (defined: red)"]),
+    ("light_material_emits", "materials:\n  glow: {emission: 2}\nlights:\n  - type: area\n    shape: disk\n"
+     "    center: [0, 1, 0]\n    normal: [0, -1, 0]\n    radius: 1\n    material: glow\n", 9,
+     ["lights[0].material: an area light's material must not emit (the light's emission is its radiance)"]),
+    ("two_sided_sphere_light", "lights:\n  - {type: area, shape: sphere, center: [0, 1, 0], radius: 1, "
+     "two_sided: true}\n", 2, ["lights[0]", "two_sided is for rect and disk lights"]),
+    ("two_sided_not_bool", "objects:\n  - type: sphere\n    two_sided: maybe\n", 3,
+     ["objects[0].two_sided:"]),
     ("inline_material_key", "objects:\n  - type: sphere\n    material:\n      kdd: 1\n", 4,
      ["objects[0].material: unknown key 'kdd' (did you mean 'kd'?)"]),
     ("unknown_object_type", "objects:\n  - type: sphre\n", 2,

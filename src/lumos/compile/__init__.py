@@ -56,10 +56,27 @@ class _Materials:
         self.index: dict[int, int] = {}
         self.materials: list = []  # the scene's Material of each row added by `add` (emitters have none)
 
-    def add(self, material) -> int:
-        key = id(material)
+    def add(self, material, one_sided: bool = False) -> int:
+        """The row of a scene Material (`one_sided`: its emission leaves the front only, `MAT_ONE_SIDED`)."""
+        key = (id(material), one_sided)
         if key not in self.index:
-            row = np.zeros(L.MAT_SIZE)
+            self.index[key] = len(self.rows)
+            self.materials.append(material)
+            self.rows.append(self._row(material, material.emission, one_sided))
+        return self.index[key]
+
+    def emitter(self, radiance, material=None, one_sided: bool = True) -> int:
+        """The row of an area light's surface: its radiance, and the coefficients of its material (none: black)."""
+        self.rows.append(self._row(material, radiance, one_sided))
+        self.materials.append(material)
+        return len(self.rows) - 1
+
+    @staticmethod
+    def _row(material, emission, one_sided: bool) -> np.ndarray:
+        row = np.zeros(L.MAT_SIZE)
+        row[L.MAT_SHININESS] = 1.0
+        row[L.MAT_IOR] = 1.0
+        if material is not None:
             row[L.MAT_KA : L.MAT_KA + 3] = material.ka
             row[L.MAT_KD : L.MAT_KD + 3] = material.kd
             row[L.MAT_KS : L.MAT_KS + 3] = material.ks
@@ -67,25 +84,12 @@ class _Materials:
             row[L.MAT_KR : L.MAT_KR + 3] = material.kr
             row[L.MAT_KT : L.MAT_KT + 3] = material.kt
             row[L.MAT_IOR] = material.ior
-            row[L.MAT_EMISSION : L.MAT_EMISSION + 3] = material.emission
             row[L.MAT_FRESNEL] = 1.0 if material.fresnel else 0.0
-            row[L.MAT_TEXTURE] = -1.0  # set by the texture step when the material has one
-            row[L.MAT_BUMP] = -1.0
-            self.index[key] = len(self.rows)
-            self.materials.append(material)
-            self.rows.append(row)
-        return self.index[key]
-
-    def emitter(self, radiance) -> int:
-        row = np.zeros(L.MAT_SIZE)
-        row[L.MAT_SHININESS] = 1.0
-        row[L.MAT_IOR] = 1.0
-        row[L.MAT_EMISSION : L.MAT_EMISSION + 3] = radiance
-        row[L.MAT_TEXTURE] = -1.0
+        row[L.MAT_EMISSION : L.MAT_EMISSION + 3] = emission
+        row[L.MAT_TEXTURE] = -1.0  # set by the texture step when the material has one
         row[L.MAT_BUMP] = -1.0
-        self.rows.append(row)
-        self.materials.append(None)
-        return len(self.rows) - 1
+        row[L.MAT_ONE_SIDED] = 1.0 if one_sided else 0.0
+        return row
 
     def array(self) -> np.ndarray:
         return np.array(self.rows, dtype=np.float64).reshape(-1, L.MAT_SIZE)
@@ -149,7 +153,9 @@ def _lights(scene, materials: _Materials, emitters: list):
         vecs[i, L.LV_DIFFUSE] = light.radiance
         vecs[i, L.LV_SPECULAR] = light.radiance
         samples[i] = light.samples
-        mat = materials.emitter(light.radiance)
+        scalars[i, L.LS_TWO_SIDED] = 1.0 if light.two_sided else 0.0
+        mat = materials.emitter(light.radiance, scene.material_of(light),
+                                one_sided=light.shape != "sphere" and not light.two_sided)
         if light.shape == "rect":
             kind[i] = L.LIGHT_RECT
             m = rect_canonical(light.corner, light.edge_u, light.edge_v)
@@ -198,7 +204,7 @@ def compile_scene(scene) -> CompiledScene:
     names = []
     for object_id, obj in enumerate(scene.objects):
         names.append(obj.name or f"{obj.type}#{object_id}")
-        mat = materials.add(scene.material_of(obj))
+        mat = materials.add(scene.material_of(obj), one_sided=not obj.two_sided)
         world_from_object = None if obj.transform is None else obj.transform.to_matrix()
         if obj.type in ("triangle", "mesh"):
             if any(obj.motion):
@@ -226,9 +232,11 @@ def compile_scene(scene) -> CompiledScene:
 def _material_names(scene, materials: _Materials) -> list[str]:
     """A name for each material row, for messages: its key in `materials:` or the object that holds it inline."""
     names = {id(m): repr(name) for name, m in scene.materials.items()}
-    for i, obj in enumerate(scene.objects):
-        if obj.material is not None and not isinstance(obj.material, str):
-            names.setdefault(id(obj.material), f"objects[{i}].material")
+    for key, things in (("objects", scene.objects), ("lights", scene.lights)):
+        for i, thing in enumerate(things):
+            material = getattr(thing, "material", None)
+            if material is not None and not isinstance(material, str):
+                names.setdefault(id(material), f"{key}[{i}].material")
     return [names.get(id(m), "(default)" if m is not None else "(light)") for m in materials.materials]
 
 
@@ -238,7 +246,7 @@ def compile_raster(scene, tessellation: int, shadows: bool) -> CompiledScene:
     instead of the analytic shapes."""
     materials = _Materials()
     names = [obj.name or f"{obj.type}#{i}" for i, obj in enumerate(scene.objects)]
-    object_materials = [materials.add(scene.material_of(obj)) for obj in scene.objects]
+    object_materials = [materials.add(scene.material_of(obj), one_sided=not obj.two_sided) for obj in scene.objects]
     emitters = []
     lights = _lights(scene, materials, emitters)
     mesh = build_raster_mesh(scene, tessellation, object_materials, emitters, material_row=materials.add)
@@ -377,7 +385,8 @@ def triangle_arrays(tri_verts: np.ndarray, tri_ids: np.ndarray) -> CompiledScene
     materials = _Materials()
     materials.emitter((0.0, 0.0, 0.0))
     lights = (np.zeros(0, np.int32), np.zeros(0, np.int32), np.zeros((0, 6, 3)), np.zeros((0, 5)))
-    stand_in = SimpleNamespace(ambient=(0.0, 0.0, 0.0), background=(0.0, 0.0, 0.0), materials={}, objects=[])
+    stand_in = SimpleNamespace(ambient=(0.0, 0.0, 0.0), background=(0.0, 0.0, 0.0), materials={}, objects=[],
+                               lights=[])
     parts = [(np.asarray(tri_verts, np.float64), None, None, 0, np.asarray(tri_ids, np.int32))]
     return _assemble(stand_in, materials, _Shapes(), parts, lights, [])
 

@@ -41,8 +41,8 @@ def add_csg(obj, object_id, world_from_object, scene, materials, shapes, tri_par
     if not hasattr(shapes, "csg_nodes"):
         shapes.csg_nodes = []
         shapes.solid_triangles = []  # (verts, normals, uvs, material, object), as tri_parts
-    builder = _Builder(scene, materials, shapes, object_id, obj.motion, len(shapes.csg_nodes))
-    root_material = materials.add(scene.material_of(obj))
+    builder = _Builder(scene, materials, shapes, object_id, obj.motion, len(shapes.csg_nodes), not obj.two_sided)
+    root_material = materials.add(scene.material_of(obj), one_sided=not obj.two_sided)
     root, box = builder.node(obj, world_from_object, root_material, f"objects[{object_id}]")
     shapes.csg_nodes.extend(builder.nodes)
     shapes.csg_nodes.extend(builder.leaves)
@@ -51,8 +51,8 @@ def add_csg(obj, object_id, world_from_object, scene, materials, shapes, tri_par
 
 
 class _Builder:
-    def __init__(self, scene, materials, shapes, object_id, motion, first_row):
-        self.scene, self.materials, self.shapes = scene, materials, shapes
+    def __init__(self, scene, materials, shapes, object_id, motion, first_row, one_sided=False):
+        self.scene, self.materials, self.shapes, self.one_sided = scene, materials, shapes, one_sided
         self.object_id, self.motion, self.first_row = object_id, motion, first_row
         self.nodes = []  # [op, left, right, parent], post-order
         self.leaves = []  # [CSG_LEAF, ~shape, parent, 0]
@@ -62,7 +62,8 @@ class _Builder:
         """(child reference, world bounds (6,)) of the csg node `obj` placed by world_from_node."""
         refs, boxes = [], []
         for child, world, at in operands(obj, world_from_node, where):
-            mat = material if child.material is None else self.materials.add(self.scene.material_of(child))
+            mat = material if child.material is None else self.materials.add(self.scene.material_of(child),
+                                                                              one_sided=self.one_sided)
             ref, box = self.node(child, world, mat, at) if child.type == "csg" else self.leaf(child, world, mat, at)
             refs.append(ref)
             boxes.append(box)

@@ -18,13 +18,14 @@
 its polygons is a patch of its own, facing its own way; a closed solid (sphere, box, capped cylinder or cone, a
 watertight consistently wound mesh) has its outside, and its inside too only when a light or the camera is
 inside it (a room built as a box); when every light and the camera are inside, its outside is no patch (no
-light reaches it and no eye sees it: the furnace, the closed room). A side that is not a patch (the inside of a solid, the back of a one-sided
-light) still blocks light. The polygons (`polys`) are the geometry, shared by both
+light reaches it and no eye sees it: the furnace, the closed room). A side that is not a patch (the inside of a solid, the back of a rect or disk
+light that neither emits there nor has a material) still blocks light. The polygons (`polys`) are the geometry, shared by both
 sides; `side_patch` maps each polygon's front (the side its normal points to) and back to a patch.
 
 **Materials, read as radiosity reads them.** ρ = kd (scaled down, as the path tracer does, when kd + ks + kr +
 kt exceeds 1); ks, kr and kt take no part in the diffuse solution (the display traces mirrors and glass in a
-second pass); emission is emitted on every side that is a patch. Textures are not looked up per point: a
+second pass); emission leaves every side that is a patch, except the back of a one-sided emitter (an object with
+`two_sided: false`; a rect or disk light unless it is `two_sided`). An area light with a material reflects as ρ. Textures are not looked up per point: a
 textured material takes part with its texture's mean colour where it applies (a warning says so).
 """
 
@@ -87,8 +88,9 @@ class _Builder:
         self.optics = np.zeros(8)  # of the object being added (set by mesh_scene)
 
     def add(self, verts: np.ndarray, polys: np.ndarray, front: bool, back: bool, rho, le, object_id: int,
-            material: int, group: int, solid: bool = False) -> None:
-        """Polygons (m, 3 or 4) over `verts` (k, 3), counter-clockwise about their front normal."""
+            material: int, group: int, solid: bool = False, emit_back: bool = True) -> None:
+        """Polygons (m, 3 or 4) over `verts` (k, 3), counter-clockwise about their front normal; `le` leaves the
+        front patches, and the back ones where `emit_back`."""
         if len(polys) == 0:
             return
         polys = np.asarray(polys, np.int64)
@@ -98,7 +100,8 @@ class _Builder:
         self.vertices.append(np.asarray(verts, np.float64))
         self.polys.append(out.astype(np.int32))
         self.count += len(verts)
-        self.meta.append((len(polys), front, back, np.asarray(rho, np.float64), np.asarray(le, np.float64),
+        le = np.asarray(le, np.float64)
+        self.meta.append((len(polys), front, back, np.asarray(rho, np.float64), (le, le if emit_back else 0.0 * le),
                           object_id, material, group, self.optics, solid))
 
 
@@ -278,8 +281,8 @@ class Surface:
     outer: bool  # the front side (the side the polygons' normals face) is a patch
     inner: bool  # the back side is a patch
     group: int  # smoothing group of the display
-    material: object = None  # the scene's Material; None for an area light
-    emission: np.ndarray = None  # an area light's radiance
+    material: object = None  # the scene's Material; an area light's (None: it reflects nothing)
+    emission: np.ndarray = None  # an area light's radiance (None for an object: its material's emission)
     solid: bool = False
     grid: tuple = None
     triangles: Callable = None  # () -> (vertices (k, 3), triangles (m, 3))
@@ -347,14 +350,17 @@ def surfaces(scene, segments: int, plane_lo, plane_hi):
                 return t.vertices, t.faces
 
             yield Surface(object_id, outer, inner, object_id, material, solid=closed, triangles=tessellated)
-    # area lights: their emitting shapes, lit side only (the other side of a rect or disk blocks light)
+    # area lights: their emitting shapes, the lit side a patch, and the other one where it emits too or reflects
+    # (else the other side of a rect or disk only blocks light)
     n_objects = len(scene.objects)
     for i, light in enumerate(scene.lights):
         if light.type != "area":
             continue
         le = np.asarray(light.radiance, np.float64)
+        material = scene.material_of(light)
+        back = light.two_sided or material is not None
         if light.shape == "rect":
-            yield Surface(n_objects + i, True, False, n_objects + i, emission=le,
+            yield Surface(n_objects + i, True, back, n_objects + i, material, emission=le,
                           grid=(np.asarray(light.corner, float), np.asarray(light.edge_u, float),
                                 np.asarray(light.edge_v, float)))
             continue
@@ -372,7 +378,8 @@ def surfaces(scene, segments: int, plane_lo, plane_hi):
             t = tessellate_object(kind, m, segments, True, f"lights[{i}]", "light")
             return t.vertices, t.faces
 
-        yield Surface(n_objects + i, True, False, n_objects + i, emission=le, triangles=tessellated)
+        yield Surface(n_objects + i, True, back and light.shape == "disk", n_objects + i, material, emission=le,
+                      triangles=tessellated)
 
 
 def _plane_box(scene, bounds) -> tuple[np.ndarray, np.ndarray]:
@@ -435,18 +442,24 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
     def optics(material) -> np.ndarray:
         return np.array([*material.kr, *material.kt, material.ior, 1.0 if material.fresnel else 0.0])
 
+    n_objects = len(scene.objects)
     for surface in surfaces(scene, segments, plane_lo, plane_hi):
-        if surface.material is None:  # an area light: emits on its lit side, reflects nothing
+        if surface.material is None:  # an area light without a material: emits, reflects nothing
             mat, rho, le = -1, np.zeros(3), surface.emission
             b.optics = np.zeros(8)
         else:
             mat, rho, le = material_row(surface.material)
             b.optics = optics(surface.material)
+        if surface.object_id < n_objects:  # an object: two-sided emission unless it says otherwise
+            emit_back = scene.objects[surface.object_id].two_sided
+        else:  # an area light: its radiance, on its back only where two-sided
+            le, emit_back = surface.emission, scene.lights[surface.object_id - n_objects].two_sided
         if surface.grid is not None:
             v, polys = _grid_quads(*surface.grid, patch_size)
         else:
             v, polys = _split_triangles(*surface.triangles(), patch_size)
-        b.add(v, polys, surface.outer, surface.inner, rho, le, surface.object_id, mat, surface.group, surface.solid)
+        b.add(v, polys, surface.outer, surface.inner, rho, le, surface.object_id, mat, surface.group, surface.solid,
+              emit_back)
     return _assemble(b)
 
 
@@ -481,7 +494,7 @@ def _assemble(b: _Builder) -> Patches:
             cols["poly"].append(idx)
             cols["side"].append(np.full(len(idx), 1 if side == 0 else -1, np.int8))
             cols["rho"].append(np.broadcast_to(rho, (len(idx), 3)))
-            cols["le"].append(np.broadcast_to(le, (len(idx), 3)))
+            cols["le"].append(np.broadcast_to(le[side], (len(idx), 3)))
             cols["obj"].append(np.full(len(idx), obj, np.int32))
             cols["mat"].append(np.full(len(idx), mat, np.int32))
             cols["group"].append(np.full(len(idx), 2 * group + side, np.int32))

@@ -129,8 +129,8 @@ def _plane_part(world_from_canonical, center, extent, segments, material, object
 
 def build_raster_mesh(scene, segments: int, object_materials: list, emitters: list, *, material_row) -> RasterMesh:
     """The polygons of `scene`. `object_materials[i]` is object i's material row; `emitters` lists the area
-    lights' (shape kind, world_from_canonical, material row, light index); `material_row(material)` gives the
-    row of a scene Material (for the solids of csg objects that have their own)."""
+    lights' (shape kind, world_from_canonical, material row, light index); `material_row(material, one_sided)`
+    gives the row of a scene Material (for the solids of csg objects that have their own)."""
     cam = np.asarray(scene.camera.position, dtype=np.float64)
     parts = []
     analytic_points = [cam]
@@ -146,7 +146,8 @@ def build_raster_mesh(scene, segments: int, object_materials: list, emitters: li
         world_from_object = None if obj.transform is None else obj.transform.to_matrix()
         if obj.type in ("triangle", "mesh", "csg"):
             if obj.type == "csg":
-                new = [_Part(p.vertices, p.normals, p.uvs, p.faces, p.groups, material_row(p.material), object_id)
+                new = [_Part(p.vertices, p.normals, p.uvs, p.faces, p.groups, material_row(p.material, not obj.two_sided),
+                              object_id)
                        for p in csg_pieces(scene, obj, world_from_object, segments, f"objects[{object_id}]")]
             else:
                 new = [_mesh_part(obj, world_from_object, mat, object_id)]

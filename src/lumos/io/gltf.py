@@ -91,6 +91,8 @@ def _mesh_objects(doc: Document, mesh: int, world: np.ndarray, node_name, materi
         obj["material"] = materials.key(doc.index(prim, "material", at_p, "materials")) if "material" in prim else None
         if obj["material"] is None:
             del obj["material"]  # the scene's default matte grey (glTF's default material is a rough white metal)
+        elif obj["material"] in materials.one_sided_emitters:
+            obj["two_sided"] = False  # glTF: a material that is not doubleSided has a front only, emission included
         objects.append(obj)
     return objects
 

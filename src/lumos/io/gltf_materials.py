@@ -48,6 +48,8 @@ class Materials:
     def __init__(self, doc):
         self.doc = doc
         self.used: dict[str, dict] = {}
+        #: the names of emissive materials that are not `doubleSided`: their objects emit on the front only
+        self.one_sided_emitters: set[str] = set()
         self._names: dict[int, str] = {}
         self._images: dict[int, tuple[str, bool] | None] = {}
 
@@ -60,6 +62,8 @@ class Materials:
                 name = f"{name}#{index}"
             self._names[index] = name
             self.used[name] = self._convert(item, f"materials[{index}]")
+            if "emission" in self.used[name] and item.get("doubleSided") is not True:
+                self.one_sided_emitters.add(name)
         return self._names[index]
 
     # ---- the mapping

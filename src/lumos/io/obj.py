@@ -52,7 +52,8 @@ def import_obj(path: str | os.PathLike) -> ImportedModel:
     """Read the OBJ file `path` and the MTL libraries it names into an `ImportedModel`.
 
     Objects: {"type": "mesh", "name", "material" (an MTL name or None), "vertices" float64 (n, 3),
-    "faces" int64 (m, 3), "normals"? float64 (n, 3) unit, "uvs"? float64 (n, 2)}. Raises LumosError
+    "faces" int64 (m, 3), "normals"? float64 (n, 3) unit, "uvs"? float64 (n, 2), "two_sided"? False where its
+    material emits (Ke): emission leaves the counter-clockwise side only}. Raises LumosError
     `<file>:<line>: <what>` for an index out of range, a number that is not one (or NaN, infinite), a face
     with fewer than 3 corners, and a file without faces; sloppy but readable input is a warning.
     """
@@ -91,6 +92,9 @@ def import_obj(path: str | os.PathLike) -> ImportedModel:
         if len(tris):
             objects.append(_mesh(name, material, tris, corner_v, corner_vt, corner_normal, positions, uvs,
                                  normal_table, label, warnings))
+    for obj in objects:  # an emissive part (Ke) emits on the side its faces wind to, as Mitsuba and pbrt read lights
+        if np.any(np.asarray(materials.get(obj["material"], {}).get("emission", 0.0)) > 0):
+            obj["two_sided"] = False
     return ImportedModel(source=src.resolve(), materials=materials, objects=objects, warnings=warnings)
 
 

@@ -10,8 +10,9 @@ The pdfs include the probability of picking the entry. Area lights use the routi
 (or Ω/π for a sphere), which is 1/(π·pdf) with pdf the solid-angle density of its sample. Delta lights (point,
 spot, directional) return their irradiance factor instead (DESIGN.md §3: E = π·I·cosθ/att(d)) with delta = True.
 
-Emissive primitives emit on both sides (as `raycast` and `whitted` show them); area lights of shape rect and
-disk on the side of their normal only. Emissive shapes are sampled uniformly over the area of their canonical
+Emissive primitives emit on both sides unless their material row says one (`MAT_ONE_SIDED`: an object with
+`two_sided: false`, the front being the side its geometric normal faces); area lights of shape rect and disk on
+the side of their normal only, unless `two_sided` (`LS_TWO_SIDED`). Emissive shapes are sampled uniformly over the area of their canonical
 form, part by part, and the density carried to the world by the Jacobian J = |det M|·|M⁻ᵀ n| of the area
 element (M the linear part of world_from_canonical, n the canonical unit normal), so any affine placement,
 non-uniform scale included, is sampled exactly.
@@ -39,6 +40,7 @@ from .layout import (
     LV_POSITION,
     LV_SPECULAR,
     MAT_EMISSION,
+    MAT_ONE_SIDED,
     SHAPE_BOX,
     SHAPE_CONE,
     SHAPE_CYLINDER,
@@ -200,7 +202,10 @@ def sample_emitter(em, lit, surf, p, u_pick, u1, u2, time):
         return _NO_SAMPLE
     dist = math.sqrt(d2)
     wi = mul(to, 1.0 / dist)
-    cos_y = abs(dot(n_y, wi))  # emissive objects emit on both sides
+    cos_y = dot(n_y, wi)  # < 0: p is on the side the emitter's normal faces
+    if lit.materials[mat, MAT_ONE_SIDED] != 0.0 and cos_y >= 0.0:
+        return _NO_SAMPLE  # p is behind a one-sided emitter
+    cos_y = abs(cos_y)
     if not cos_y > 0.0:
         return _NO_SAMPLE
     le = row3(lit.materials[mat:mat + 1, MAT_EMISSION:MAT_EMISSION + 3], 0)

@@ -31,6 +31,7 @@ from .layout import (
     LS_COS_INNER,
     LS_COS_OUTER,
     LS_RADIUS,
+    LS_TWO_SIDED,
     LV_DIFFUSE,
     LV_DIRECTION,
     LV_EDGE_U,
@@ -107,6 +108,8 @@ def sample_light(lit, j, p, u1, u2):
         inv = 1.0 / dist
         L = mul(to, inv)
         cos_light = -dot(row3(vecs, LV_DIRECTION), L)  # one-sided: emits along its normal only
+        if sc[LS_TWO_SIDED] != 0.0:
+            cos_light = abs(cos_light)
         if cos_light <= 0.0:
             return L, dist, 0.0
         return L, dist, cos_light * sc[LS_AREA] * _INV_PI * (inv * inv)

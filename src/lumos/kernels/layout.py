@@ -48,7 +48,8 @@ MAT_TEXTURE = 21  # first row in tex_info of the material's textures, or -1 (the
 MAT_BUMP = 22  # row in tex_info of its bump map, or -1
 MAT_TEXTURE_COUNT = 23  # how many tex_info rows from MAT_TEXTURE are its textures (0 with none)
 MAT_CUTOUT = 24  # 1.0: one of its textures applies to opacity, so its surfaces may have holes (kernels.cutout)
-MAT_SIZE = 25
+MAT_ONE_SIDED = 25  # 1.0: its emission leaves the front only (the side the geometric normal faces); it reflects on both
+MAT_SIZE = 26
 
 # Light kinds and columns. Kinds up to LIGHT_DIRECTIONAL are delta lights (one direction per shading point, no
 # random samples); the kinds above them are area lights.
@@ -74,7 +75,8 @@ LS_RADIUS = 3  # disk/sphere
 LS_AREA = 4  # area lights
 LS_COS_OUTER = 5  # spot: cos(angle), no light where cosθ < it
 LS_COS_INNER = 6  # spot: cos(inner_angle), full intensity where cosθ >= it
-LS_SIZE = 7
+LS_TWO_SIDED = 7  # rect/disk: 1.0 when it emits on both sides (else along LV_DIRECTION only)
+LS_SIZE = 8
 
 # Emitters of the path tracer (`Emitters`): every light and every emissive primitive, picked by power
 EMIT_LIGHT = 0  # a scene light (point, spot, directional or area; its light_kind says which); emit_ref: light index

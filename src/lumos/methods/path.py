@@ -49,7 +49,7 @@ from ..kernels.cutout import closest_visible_hit, occluded
 from ..kernels.emitters import emitter_pdf, sample_emitter
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
-from ..kernels.layout import CAM_APERTURE, LIGHT_SPHERE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_SHININESS
+from ..kernels.layout import CAM_APERTURE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_ONE_SIDED, MAT_SHININESS
 from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
 from ..kernels.sobol import pair_seed, sobol_block
 from ..kernels.sampling import truncated_gaussian
@@ -206,8 +206,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         ka, kd, ks, kr, le = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
         # stage 2: emission found by the BSDF-sampled ray, weighted against light sampling
         le0, le1, le2 = le
-        if (le0 > 0.0 or le1 > 0.0 or le2 > 0.0) and (light < 0 or lit.light_kind[light] == LIGHT_SPHERE
-                                                      or entering):
+        if (le0 > 0.0 or le1 > 0.0 or le2 > 0.0) and (entering or mat[MAT_ONE_SIDED] == 0.0):
             w = _emission_weight(em, lit, surf, ref, light, hit[4], prev_p, d, t, n_geo, time, prev_delta, prev_pdf,
                                  mode)
             L0 += b0 * le0 * w

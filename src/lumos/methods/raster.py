@@ -28,8 +28,9 @@ from ..compile.camera import camera_arrays
 from ..kernels import raster as R
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_inline, njit_serial
-from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, LIGHT_SPHERE, MAT_BUMP, MAT_CUTOUT, MAT_EMISSION,
-                              MAT_KA, MAT_KD, MAT_KS, MAT_SHININESS, MAT_SIZE, MAT_TEXTURE, Textures)
+from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, MAT_BUMP, MAT_CUTOUT, MAT_EMISSION,
+                              MAT_KA, MAT_KD, MAT_KS, MAT_ONE_SIDED, MAT_SHININESS, MAT_SIZE, MAT_TEXTURE,
+                              Textures)
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
 from ..kernels.surface import shading_side
@@ -234,7 +235,6 @@ def _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_ter
                         terms[y, x, 9 + k] += weight * sa.background[k]
                 continue
             mat_id = prim_info[prim, 0]
-            light = prim_info[prim, 2]
             mat = lit.materials[mat_id]
             p = (np.float64(gbuf[y, x, G_POS]), np.float64(gbuf[y, x, G_POS + 1]), np.float64(gbuf[y, x, G_POS + 2]))
             V = _toward_eye(p, cam_vecs, ortho)
@@ -285,12 +285,12 @@ def _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_ter
                                                        stack, stack_t, 0.0, light_log,
                                                        0 if x == explain[0] and y == explain[1] else -1)
                     rays += extra
-            # emitted light: one-sided for rect and disk area lights (their winding faces the lit side)
+            # emitted light: one-sided emitters (rect and disk lights, one-sided objects) on their front only
             if textured and shading == FLAT:  # the emission per pixel (the light at the polygon's centroid)
                 ke = material_coeffs_filtered(tex, mat, np.float64(gbuf[y, x, uv_at]),
                                               np.float64(gbuf[y, x, uv_at + 1]), p, fp[0], fp[1], fp[2], fp[3])[4]
             e = (0.0, 0.0, 0.0)
-            if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] >= 0.0:
+            if mat[MAT_ONE_SIDED] == 0.0 or fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] >= 0.0:
                 e = ke
             for k in range(3):
                 accum[y, x, k] += weight * (a[k] + d[k] + sp[k] + e[k])

@@ -18,7 +18,7 @@ from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_serial
-from ..kernels.layout import LIGHT_SPHERE, MAT_SHININESS
+from ..kernels.layout import MAT_ONE_SIDED, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
 from ..kernels.bump import material_in_cone
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
@@ -40,9 +40,9 @@ def shade_hit(surf, lit, tex, geo, o, d, cone, hit, seed, pixel, sample, shadows
     # the material's coefficients and the shading normal, textures and bump map filtered over the ray's cone
     ka, kd, ks, kr, ke, n_sh = material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n_sh, u, v, d,
                                                 abs(cone[0] + cone[1] * t), 0.0)
-    # emitted light: two-sided for emissive materials, one-sided for rect and disk area lights
+    # emitted light: from the front only where the material says so (rect and disk lights, one-sided objects)
     emit = 1.0
-    if light_id >= 0 and lit.light_kind[light_id] != LIGHT_SPHERE and dot(n_geo, V) < 0.0:
+    if mat[MAT_ONE_SIDED] != 0.0 and dot(n_geo, V) < 0.0:
         emit = 0.0
     # the shading normal on the viewer's side of the surface (DESIGN.md §3: two-sided surfaces)
     n_sh = shading_side(n_sh, n_geo, V)

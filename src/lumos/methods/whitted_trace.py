@@ -13,7 +13,7 @@ from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline
-from ..kernels.layout import LIGHT_SPHERE, MAT_FRESNEL, MAT_IOR, MAT_KT, MAT_SHININESS
+from ..kernels.layout import MAT_FRESNEL, MAT_IOR, MAT_KT, MAT_ONE_SIDED, MAT_SHININESS
 from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
 from ..kernels.surface import curvature_seen, offset_origin, shading_side, surface_at
@@ -218,7 +218,7 @@ def _shade(geo, surf, lit, tex, ro, rd, hit, width, time, seed, pixel, sample, s
     n_s = shading_side(n_sh, n_geo, V)
     n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
     e = (0.0, 0.0, 0.0)
-    if light < 0 or lit.light_kind[light] == LIGHT_SPHERE or entering:  # rect and disk lights: their lit side
+    if mat[MAT_ONE_SIDED] == 0.0 or entering:  # a one-sided emitter (rect and disk lights): its front only
         e = ke
     kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
     la, ld, ls, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, mat[MAT_SHININESS],

@@ -9,6 +9,7 @@ from typing import Annotated, Any, Literal, Optional, Union
 
 from pydantic import Discriminator, Field, Tag, field_validator, model_validator
 
+from .materials import MaterialRef
 from .types import Color, Direction, NonNegative, Positive, StrictModel, Vec3, cross, norm
 
 
@@ -77,13 +78,19 @@ class DirectionalLight(_LocalLight):
 
 
 class _AreaLight(StrictModel):
+    """A light that is also a surface: `radiance` leaves it (on one side for rect and disk lights, unless
+    `two_sided`), and, given a `material`, it reflects like any object (its material's own emission must be 0: the
+    light's is `radiance`). Without one it reflects nothing."""
+
     type: Literal["area"]
     radiance: Color = (1.0, 1.0, 1.0)
     samples: Annotated[int, Field(ge=1, le=4096)] = 16
+    two_sided: bool = False
+    material: Optional[MaterialRef] = None
 
 
 class RectLight(_AreaLight):
-    """Emits on the side of cross(edge_u, edge_v) only."""
+    """Emits on the side of cross(edge_u, edge_v) only (on both with `two_sided`)."""
 
     shape: Literal["rect"]
     corner: Vec3
@@ -98,7 +105,7 @@ class RectLight(_AreaLight):
 
 
 class DiskLight(_AreaLight):
-    """Emits on the side of `normal` only."""
+    """Emits on the side of `normal` only (on both with `two_sided`)."""
 
     shape: Literal["disk"]
     center: Vec3
@@ -112,6 +119,13 @@ class SphereLight(_AreaLight):
     shape: Literal["sphere"]
     center: Vec3
     radius: Positive
+
+    @model_validator(mode="after")
+    def _check_sides(self):
+        if self.two_sided:
+            raise ValueError("two_sided is for rect and disk lights: a sphere light emits outward from its whole "
+                             "surface")
+        return self
 
 
 def _light_tag(value: Any) -> Optional[str]:

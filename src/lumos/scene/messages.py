@@ -16,7 +16,7 @@ from typing import Annotated, Any, Literal, Optional, Union, get_args, get_origi
 from pydantic import BaseModel, Tag, ValidationError
 
 from . import model as _model
-from .model import UnknownMaterial
+from .model import MaterialError
 
 
 def format_validation_error(
@@ -225,8 +225,8 @@ def _explain(err: dict, path: list, kinds: list) -> tuple[tuple, tuple, str, tup
 
 def _explain_one(err: dict, path: tuple, kinds: list) -> tuple[tuple, tuple, str]:
     kind, value, ctx = err["type"], err.get("input"), err.get("ctx") or {}
-    if kind == "value_error" and isinstance(ctx.get("error"), UnknownMaterial):
-        where = ("objects", ctx["error"].index, "material")
+    if kind == "value_error" and isinstance(ctx.get("error"), MaterialError):
+        where = ctx["error"].where
         return where, where, str(ctx["error"])
     if kind == "missing" and path and isinstance(path[-1], int):
         return path[:-1], path[:-1], _length_message(_tuple_length(kinds[-2]), value)

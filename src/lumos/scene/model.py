@@ -106,6 +106,7 @@ __all__ = [
     "Texture",
     "Transform",
     "Triangle",
+    "MaterialError",
     "UnknownMaterial",
 ]
 
@@ -128,15 +129,25 @@ class Scene(StrictModel):
 
     @model_validator(mode="after")
     def _check_material_names(self):
+        known = ", ".join(sorted(self.materials)) or "none are defined"
         for i, obj in enumerate(self.objects):
             if isinstance(obj.material, str) and obj.material not in self.materials:
-                known = ", ".join(sorted(self.materials)) or "none are defined"
-                raise UnknownMaterial(i, obj.material, known)
+                raise UnknownMaterial(("objects", i, "material"), obj.material, known)
+        for i, light in enumerate(self.lights):
+            if getattr(light, "material", None) is None:
+                continue
+            if isinstance(light.material, str) and light.material not in self.materials:
+                raise UnknownMaterial(("lights", i, "material"), light.material, known)
+            if any(c > 0 for c in self.material_of(light).emission):
+                raise MaterialError(("lights", i, "material"), "an area light's material must not emit (the "
+                                    "light's emission is its radiance); give the material emission 0")
         return self
 
     def material_of(self, obj) -> Material:
+        """The material of an object (the default one where it has none), or of an area light (None where it
+        has none: a light without a material reflects nothing)."""
         if obj.material is None:
-            return DEFAULT_MATERIAL
+            return None if obj.type == "area" else DEFAULT_MATERIAL
         if isinstance(obj.material, str):
             return self.materials[obj.material]
         return obj.material
@@ -152,10 +163,18 @@ class Scene(StrictModel):
         return self._made_for_model
 
 
-class UnknownMaterial(ValueError):
-    """Raised by Scene validation; the loader reports it at objects[i].material."""
+class MaterialError(ValueError):
+    """Raised by Scene validation about a material reference; the loader reports it at `where` (a key path such as
+    ("objects", 3, "material"))."""
 
-    def __init__(self, index: int, name: str, known: str):
-        super().__init__(f"unknown material '{name}' (defined: {known})")
-        self.index = index
+    def __init__(self, where: tuple, message: str):
+        super().__init__(message)
+        self.where = where
+
+
+class UnknownMaterial(MaterialError):
+    """A material name that `materials:` does not define."""
+
+    def __init__(self, where: tuple, name: str, known: str):
+        super().__init__(where, f"unknown material '{name}' (defined: {known})")
         self.name = name

@@ -22,6 +22,9 @@ class ObjectBase(StrictModel):
     transform: Optional[Transform] = None
     #: velocity: at time τ of the camera's shutter interval the object is moved by τ·motion (motion blur)
     motion: Vec3 = (0.0, 0.0, 0.0)
+    #: an emissive object's emission leaves both sides (true) or only the side its geometric normal faces: a
+    #: solid's outside, a mesh's counter-clockwise side, a rect's cross(edge_u, edge_v). Reflection is two-sided.
+    two_sided: bool = True
 
 
 class Sphere(ObjectBase):
