@@ -77,11 +77,16 @@ class _Materials:
         row[L.MAT_SHININESS] = 1.0
         row[L.MAT_IOR] = 1.0
         if material is not None:
-            row[L.MAT_KA : L.MAT_KA + 3] = material.ka
-            row[L.MAT_KD : L.MAT_KD + 3] = material.kd
-            row[L.MAT_KS : L.MAT_KS + 3] = material.ks
-            row[L.MAT_SHININESS] = material.shininess
-            row[L.MAT_KR : L.MAT_KR + 3] = material.kr
+            classic = {k: getattr(material, k) for k in ("ka", "kd", "ks", "shininess", "kr")}
+            if material.conductor is not None:  # the classic reading of a metal, where not given
+                derived = material.conductor.classic()
+                classic.update({k: v for k, v in derived.items() if k not in material.model_fields_set})
+                _conductor_columns(row, material.conductor)
+            row[L.MAT_KA : L.MAT_KA + 3] = classic["ka"]
+            row[L.MAT_KD : L.MAT_KD + 3] = classic["kd"]
+            row[L.MAT_KS : L.MAT_KS + 3] = classic["ks"]
+            row[L.MAT_SHININESS] = classic["shininess"]
+            row[L.MAT_KR : L.MAT_KR + 3] = classic["kr"]
             row[L.MAT_KT : L.MAT_KT + 3] = material.kt
             row[L.MAT_IOR] = material.ior
             row[L.MAT_FRESNEL] = 1.0 if material.fresnel else 0.0
@@ -93,6 +98,17 @@ class _Materials:
 
     def array(self) -> np.ndarray:
         return np.array(self.rows, dtype=np.float64).reshape(-1, L.MAT_SIZE)
+
+
+def _conductor_columns(row: np.ndarray, conductor) -> None:
+    """The physical model's columns of a metal (MAT_MODEL …, `kernels.layout`)."""
+    row[L.MAT_MODEL] = L.MODEL_CONDUCTOR
+    row[L.MAT_ALPHA : L.MAT_ALPHA + 2] = conductor.alphas
+    index = conductor.index
+    if index is not None:  # else η = k = 0: F = 1 (kernels.microfacet.fresnel_conductor)
+        row[L.MAT_ETA : L.MAT_ETA + 3] = index[0]
+        row[L.MAT_K : L.MAT_K + 3] = index[1]
+    row[L.MAT_TINT : L.MAT_TINT + 3] = conductor.tint
 
 
 class _Shapes:

@@ -6,6 +6,10 @@
               + kr·δ(wi = mirror of wo)                 perfect mirror
               + kt·(smooth dielectric of index ior)     Fresnel-weighted reflection and refraction
 
+A metal (MODEL_CONDUCTOR) replaces the Phong lobe by a GGX microfacet lobe with the conductor's Fresnel factor
+(`kernels.microfacet`), ks its tint; a smooth one is the mirror lobe weighted by that Fresnel factor. The glossy
+lobe's parameters travel as one tuple (`glossy_lobe`).
+
 The first two are the smooth part (`eval_smooth`); the last two are delta lobes, reached only by sampling.
 `sample_*` functions return the sampled direction with its pdf (solid angle), so each sampler can be checked
 against its pdf by a χ² test. A lobe is chosen with probability `lobe_probs` (proportional to the mean of its
@@ -18,6 +22,8 @@ All vectors are unit tuples; `n` is the shading normal on the side of wo (wo·n 
 import math
 
 from .jit import njit, njit_inline
+from .layout import MAT_ALPHA, MAT_ETA, MAT_K, MAT_MODEL, MAT_SHININESS, MODEL_CONDUCTOR
+from .microfacet import eval_ggx, fresnel_conductor, sample_ggx
 from .sampling import turn
 from .vec import dot, madd, mul, orthonormal_basis
 
@@ -52,6 +58,22 @@ def conserve_energy(kd, ks, kr, kt):
     return mul(kd, s), mul(ks, s), mul(kr, s), mul(kt, s)
 
 
+@njit_inline
+def glossy_lobe(mat):
+    """The glossy lobe of a material row, one tuple: (Phong exponent, model, αu, αv, η rgb, k rgb)."""
+    return (mat[MAT_SHININESS], mat[MAT_MODEL], mat[MAT_ALPHA], mat[MAT_ALPHA + 1], mat[MAT_ETA], mat[MAT_ETA + 1],
+            mat[MAT_ETA + 2], mat[MAT_K], mat[MAT_K + 1], mat[MAT_K + 2])
+
+
+@njit_inline
+def mirror_fresnel(lobe, cos_o):
+    """The Fresnel factor per channel of a smooth metal's mirror lobe at incidence cos_o (1 for the classic kr)."""
+    if lobe[1] != MODEL_CONDUCTOR:
+        return 1.0, 1.0, 1.0
+    return (fresnel_conductor(cos_o, lobe[4], lobe[7]), fresnel_conductor(cos_o, lobe[5], lobe[8]),
+            fresnel_conductor(cos_o, lobe[6], lobe[9]))
+
+
 @njit
 def mirror(wo, n):
     """wo reflected about n: 2(n·wo)n − wo."""
@@ -59,18 +81,24 @@ def mirror(wo, n):
 
 
 @njit_inline
-def eval_smooth(kd, ks, exponent, p_d, p_s, n, wo, wi):
-    """The smooth part of the BSDF for the pair (wo, wi): (f_diffuse rgb, f_phong rgb, pdf of wi).
+def eval_smooth(kd, ks, lobe, p_d, p_s, n, wo, wi):
+    """The smooth part of the BSDF for the pair (wo, wi): (f_diffuse rgb, f_glossy rgb, pdf of wi).
 
-    f_diffuse = kd/π and f_phong = ks·(n+2)/(2π)·cosⁿα, both 0 where wi is below the surface (n·wi <= 0); pdf is
-    the mixture p_d·cosθ/π + p_s·(n+1)/(2π)·cosⁿα with which `sample_cosine` and `sample_phong` draw wi."""
+    f_diffuse = kd/π and f_glossy = ks·(n+2)/(2π)·cosⁿα (n = lobe[0]), or ks times a metal's GGX lobe, both 0
+    where wi is below the surface (n·wi <= 0); pdf is the mixture p_d·cosθ/π + p_s·pdf_glossy with which
+    `sample_cosine` and `sample_phong` (or `microfacet.sample_ggx`) draw wi."""
     cos_i = dot(n, wi)
     if cos_i <= 0.0:
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0
     pdf = p_d * cos_i * _INV_PI
     fd = (kd[0] * _INV_PI, kd[1] * _INV_PI, kd[2] * _INV_PI)
     fs = (0.0, 0.0, 0.0)
-    if p_s > 0.0:
+    if p_s > 0.0 and lobe[1] == MODEL_CONDUCTOR:
+        f, pdf_g = eval_ggx(lobe, n, wo, wi)
+        fs = (ks[0] * f[0], ks[1] * f[1], ks[2] * f[2])
+        pdf += p_s * pdf_g
+    elif p_s > 0.0:
+        exponent = lobe[0]
         cos_a = dot(mirror(wo, n), wi)
         if cos_a > 0.0:
             lobe = cos_a**exponent
@@ -107,15 +135,18 @@ def sample_phong(axis, exponent, u1, u2):
 
 
 @njit_inline
-def sample_smooth(kd, ks, exponent, p_d, p_s, n, wo, u_lobe, u1, u2):
-    """A direction from the smooth part of the BSDF: the diffuse lobe when u_lobe < p_d, else the Phong lobe
-    about the mirror direction (u_lobe < p_d + p_s), with the mixture pdf of `eval_smooth`. Returns (wi, f·cos/pdf
-    as rgb, pdf); pdf = 0 when the direction falls below the surface (the Phong lobe reaches past it)."""
+def sample_smooth(kd, ks, lobe, p_d, p_s, n, wo, u_lobe, u1, u2):
+    """A direction from the smooth part of the BSDF: the diffuse lobe when u_lobe < p_d, else the glossy lobe
+    (u_lobe < p_d + p_s: Phong about the mirror direction, or a metal's visible GGX normals), with the mixture pdf
+    of `eval_smooth`. Returns (wi, f·cos/pdf as rgb, pdf); pdf = 0 when the direction falls below the surface
+    (the lobe reaches past it)."""
     if u_lobe < p_d:
         wi = sample_cosine(n, u1, u2)
+    elif lobe[1] == MODEL_CONDUCTOR:
+        wi = sample_ggx(lobe, n, wo, u1, u2)
     else:
-        wi = sample_phong(mirror(wo, n), exponent, u1, u2)
-    fd, fs, pdf = eval_smooth(kd, ks, exponent, p_d, p_s, n, wo, wi)
+        wi = sample_phong(mirror(wo, n), lobe[0], u1, u2)
+    fd, fs, pdf = eval_smooth(kd, ks, lobe, p_d, p_s, n, wo, wi)
     if not pdf > 0.0:
         return wi, (0.0, 0.0, 0.0), 0.0
     k = dot(n, wi) / pdf

@@ -49,7 +49,17 @@ MAT_BUMP = 22  # row in tex_info of its bump map, or -1
 MAT_TEXTURE_COUNT = 23  # how many tex_info rows from MAT_TEXTURE are its textures (0 with none)
 MAT_CUTOUT = 24  # 1.0: one of its textures applies to opacity, so its surfaces may have holes (kernels.cutout)
 MAT_ONE_SIDED = 25  # 1.0: its emission leaves the front only (the side the geometric normal faces); it reflects on both
-MAT_SIZE = 26
+# The physical model the path tracer reads (the columns above are the classic model's, which the local methods
+# read; for a conductor the compile step derives them from these): MODEL_CLASSIC or MODEL_CONDUCTOR
+MAT_MODEL = 26
+MAT_ALPHA = 27  # GGX widths (αu, αv) along the tangent frame's two axes (`kernels.microfacet`)
+MAT_ETA = 29  # conductor: the real part of the complex index of refraction, per channel (0: a perfect reflector)
+MAT_K = 32  # conductor: its imaginary part (extinction), per channel
+MAT_TINT = 35  # conductor: a factor on its reflectance, per channel (Mitsuba's specular_reflectance)
+MAT_SIZE = 38
+
+MODEL_CLASSIC = 0  # kd, ks/shininess, kr, kt read as kernels.bsdf says
+MODEL_CONDUCTOR = 1  # a metal: GGX microfacets (a mirror when α = 0) with the Fresnel factor of η + ik
 
 # Light kinds and columns. Kinds up to LIGHT_DIRECTIONAL are delta lights (one direction per shading point, no
 # random samples); the kinds above them are area lights.

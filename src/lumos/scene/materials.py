@@ -13,6 +13,96 @@ from pydantic import Discriminator, Field, PrivateAttr, Tag, field_validator, mo
 from .types import Color, Finite, NonNegative, Positive, ShareColor, StrictModel
 
 
+#: Complex indices of refraction (η, k) per RGB channel of named metals: the values Mitsuba 3's RGB variants use
+#: (its `conductor` plugin's `material` names, spectra averaged into linear sRGB).
+METALS = {
+    "Au": ((0.143, 0.3753, 1.442), (3.983, 2.3856, 1.6034)),
+    "Ag": ((0.1553, 0.1167, 0.1384), (4.8284, 3.1222, 2.1469)),
+    "Cu": ((0.201, 0.9237, 1.1022), (3.9133, 2.453, 2.1421)),
+    "Al": ((1.6575, 0.8804, 0.5212), (9.2238, 6.2695, 4.837)),
+    "Cr": ((4.3697, 2.9165, 1.6549), (5.2065, 4.2313, 3.7547)),
+    "W": ((4.3708, 3.3002, 2.9984), (3.5006, 2.6049, 2.2732)),
+    "Hg": ((2.3989, 1.44, 0.9096), (6.3276, 4.3719, 3.4218)),
+    "Li": ((0.2658, 0.1956, 0.2209), (3.5402, 2.3111, 1.6686)),
+    "K": ((0.064, 0.0464, 0.0382), (2.1042, 1.3489, 0.9131)),
+    "Mo": ((4.484, 3.5251, 2.7763), (4.1114, 3.4208, 3.1506)),
+    "Ni": ((2.3673, 1.6634, 1.4671), (4.4988, 3.0502, 2.3454)),
+    "Rh": ((2.5858, 1.8602, 1.5543), (6.7823, 4.703, 3.9761)),
+    "Ir": ((3.0863, 2.0822, 1.6179), (5.5922, 4.0671, 3.2673)),
+    "Ta": ((2.0627, 2.3929, 2.6279), (2.4084, 1.7415, 1.947)),
+    "Nb": ((3.4201, 2.7901, 2.3956), (3.4414, 2.7377, 2.5797)),
+    "TiN": ((1.6484, 1.1505, 1.3798), (3.3683, 1.9435, 1.1021)),
+    "Be": ((4.185, 3.185, 2.7841), (3.8355, 3.0101, 2.869)),
+}
+
+
+class Conductor(StrictModel):
+    """A metal, read physically: a GGX (Trowbridge–Reitz) microfacet surface of width `alpha` (one number, or
+    [αu, αv] for anisotropic roughness; 0: a perfect mirror) whose reflectance is the exact Fresnel factor of
+    the complex index of refraction η + ik per channel: a named `metal`, or `eta` and `k` (neither: a perfect
+    reflector, F = 1), times `tint`."""
+
+    metal: Optional[Literal[tuple(METALS)]] = None
+    eta: Optional[Color] = None
+    k: Optional[Color] = None
+    alpha: Union[tuple[NonNegative, NonNegative], NonNegative] = 0.0
+    tint: ShareColor = (1.0, 1.0, 1.0)
+
+    @field_validator("alpha", mode="before")
+    @classmethod
+    def _alpha_tuple(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.metal is not None and (self.eta is not None or self.k is not None):
+            raise ValueError("give metal or eta and k, not both")
+        if (self.eta is None) != (self.k is None):
+            raise ValueError("eta and k go together (the complex index of refraction η + ik)")
+        for a in (self.alphas):
+            if a > 1.0:
+                raise ValueError(f"alpha must be at most 1 (a GGX width), got {a:g}")
+        return self
+
+    @property
+    def alphas(self) -> tuple[float, float]:
+        return self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
+
+    @property
+    def index(self) -> Optional[tuple[tuple, tuple]]:
+        """(η, k) per channel, or None for a perfect reflector."""
+        if self.metal is not None:
+            return METALS[self.metal]
+        return None if self.eta is None else (tuple(self.eta), tuple(self.k))
+
+    def normal_reflectance(self) -> tuple[float, float, float]:
+        """F0 = ((η − 1)² + k²)/((η + 1)² + k²) per channel, times the tint: the reflectance head-on."""
+        index = self.index
+        if index is None:
+            return tuple(self.tint)
+        return tuple(t * ((e - 1.0) ** 2 + k * k) / ((e + 1.0) ** 2 + k * k)
+                     for t, e, k in zip(self.tint, *index))
+
+    def classic(self) -> dict:
+        """The classic coefficients the local methods (raycast, whitted, raster) read for this metal: its head-on
+        reflectance F0 as the mirror `kr` (α below 0.01) or as a Phong lobe `ks` whose exponent matches the GGX
+        width (`phong_exponent`), and as `ka`; no diffuse light."""
+        f0 = self.normal_reflectance()
+        alpha = 0.5 * sum(self.alphas)
+        zero = (0.0, 0.0, 0.0)
+        if alpha < 0.01:
+            return {"ka": f0, "kd": zero, "ks": zero, "kr": f0, "shininess": 1.0}
+        return {"ka": f0, "kd": zero, "ks": f0, "kr": zero, "shininess": phong_exponent(alpha)}
+
+
+def phong_exponent(alpha: float) -> float:
+    """The Phong exponent whose lobe is about as wide as a GGX (or Beckmann) lobe of width α: Blinn-Phong
+    n_B = 2/α² − 2 and a Phong lobe about the mirror direction of 4× narrower angle, n = n_B/4; in [1, 10⁴]."""
+    if alpha < 0.0025:
+        return 1e4
+    return float(min(max(0.5 * (alpha ** -2 - 1.0), 1.0), 1e4))
+
+
 class Material(StrictModel):
     """Coefficients of the classic model, per RGB channel (a scalar means grey). Missing ones are 0."""
 
@@ -30,6 +120,9 @@ class Material(StrictModel):
     #: one texture or a list of them, applied in list order (a later one sees what the earlier ones made)
     texture: Optional[Union["Texture", list["Texture"]]] = None
     bump: Optional["Bump"] = None
+    #: a metal read physically by `path` (GGX microfacets, complex Fresnel); the local methods read the classic
+    #: coefficients it implies unless they are given (`conductor_classic`)
+    conductor: Optional[Conductor] = None
 
     @field_validator("texture", mode="after")
     @classmethod
