@@ -51,3 +51,28 @@ def test_a_perfect_reflector_is_a_white_mirror_and_classic_materials_stay_classi
     np.testing.assert_allclose(perfect[L.MAT_KR:L.MAT_KR + 3], 1.0)
     np.testing.assert_array_equal(perfect[L.MAT_ETA:L.MAT_K + 3], 0.0)  # η = k = 0: F = 1
     assert plain[L.MAT_MODEL] == L.MODEL_CLASSIC
+
+
+def test_a_plastic_keeps_its_base_carries_its_coat_tables_and_reads_classically_as_its_coat():
+    from lumos.compile.plastic import coat_tables
+
+    smooth, rough = rows_of({"kd": [0.5, 0.2, 0.1], "plastic": {"ior": 1.5}},
+                            {"kd": [0.5, 0.2, 0.1], "plastic": {"alpha": 0.3, "ior": 1.5}})
+    f0 = ((1.5 - 1) / (1.5 + 1)) ** 2
+    for row, alpha in ((smooth, 0.0), (rough, 0.3)):
+        assert row[L.MAT_MODEL] == L.MODEL_PLASTIC and row[L.MAT_ETA] == 1.5
+        t, fdr = coat_tables(alpha, 1.5)
+        np.testing.assert_array_equal(row[L.MAT_COAT:L.MAT_COAT + L.MAT_COAT_SIZE], t)
+        assert row[L.MAT_FDR] == fdr
+        assert 0.0 < t.min() and t.max() < 1.0 and 0.0 < fdr < 1.0
+    np.testing.assert_allclose(smooth[L.MAT_KR:L.MAT_KR + 3], f0)
+    np.testing.assert_allclose(rough[L.MAT_KS:L.MAT_KS + 3], f0)
+    np.testing.assert_allclose(rough[L.MAT_KD:L.MAT_KD + 3], [0.5, 0.2, 0.1])
+    physical = physical_materials(["p"], rough[None])[0]  # the base stays, the coat's lobe is ks = tint, no scaling
+    np.testing.assert_allclose(physical[L.MAT_KD:L.MAT_KD + 3], [0.5, 0.2, 0.1])
+    np.testing.assert_allclose(physical[L.MAT_KS:L.MAT_KS + 3], 1.0)
+
+
+def test_a_material_is_a_metal_or_a_plastic_not_both():
+    with pytest.raises(lumos.LumosError, match="give conductor or plastic, not both"):
+        rows_of({"conductor": {}, "plastic": {}})

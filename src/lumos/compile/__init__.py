@@ -78,10 +78,11 @@ class _Materials:
         row[L.MAT_IOR] = 1.0
         if material is not None:
             classic = {k: getattr(material, k) for k in ("ka", "kd", "ks", "shininess", "kr")}
-            if material.conductor is not None:  # the classic reading of a metal, where not given
-                derived = material.conductor.classic()
+            model = material.conductor or material.plastic
+            if model is not None:  # the classic reading of a physical model, where not given
+                derived = model.classic()
                 classic.update({k: v for k, v in derived.items() if k not in material.model_fields_set})
-                _conductor_columns(row, material.conductor)
+                (_conductor_columns if material.conductor is not None else _plastic_columns)(row, model)
             row[L.MAT_KA : L.MAT_KA + 3] = classic["ka"]
             row[L.MAT_KD : L.MAT_KD + 3] = classic["kd"]
             row[L.MAT_KS : L.MAT_KS + 3] = classic["ks"]
@@ -109,6 +110,19 @@ def _conductor_columns(row: np.ndarray, conductor) -> None:
         row[L.MAT_ETA : L.MAT_ETA + 3] = index[0]
         row[L.MAT_K : L.MAT_K + 3] = index[1]
     row[L.MAT_TINT : L.MAT_TINT + 3] = conductor.tint
+
+
+def _plastic_columns(row: np.ndarray, plastic) -> None:
+    """The physical model's columns of a plastic: its coat's width, index, tint and tables (`compile.plastic`)."""
+    from .plastic import coat_tables
+
+    row[L.MAT_MODEL] = L.MODEL_PLASTIC
+    row[L.MAT_ALPHA : L.MAT_ALPHA + 2] = plastic.alpha
+    row[L.MAT_ETA] = plastic.ior
+    row[L.MAT_TINT : L.MAT_TINT + 3] = plastic.tint
+    t, fdr = coat_tables(float(plastic.alpha), float(plastic.ior))
+    row[L.MAT_FDR] = fdr
+    row[L.MAT_COAT : L.MAT_COAT + L.MAT_COAT_SIZE] = t
 
 
 class _Shapes:

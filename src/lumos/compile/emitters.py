@@ -40,20 +40,24 @@ _PART_AREAS = {
 
 
 def physical_materials(names: list[str], rows: np.ndarray) -> np.ndarray:
-    """The material rows as the path tracer reads them: a metal's (MODEL_CONDUCTOR) lobe set to its microfacet
-    one (ks = its tint; kr = its tint when it is a mirror, α = 0), and kd + ks + kr + kt scaled down to at most 1
+    """The material rows as the path tracer reads them: a physical model's (a metal's, a plastic's) lobe set to its
+    microfacet one (ks = its tint; kr = its tint when it is a mirror, α = 0; a metal has no kd), and, in the
+    classic rows, kd + ks + kr + kt scaled down to at most 1
     in every channel (more would reflect more light than arrives: energy from nothing), warning once per
     material, named by `names[row]`."""
     rows = rows.copy()
-    metals = rows[:, L.MAT_MODEL] == L.MODEL_CONDUCTOR
-    if metals.any():  # a metal's lobe is the microfacet one: ks (a mirror's kr when α = 0) carries its tint
-        tint = rows[metals, L.MAT_TINT : L.MAT_TINT + 3]
-        smooth = (rows[metals, L.MAT_ALPHA] + rows[metals, L.MAT_ALPHA + 1] == 0.0)[:, None]
-        for c in (L.MAT_KD, L.MAT_KT):
-            rows[metals, c : c + 3] = 0.0
-        rows[metals, L.MAT_KS : L.MAT_KS + 3] = np.where(smooth, 0.0, tint)
-        rows[metals, L.MAT_KR : L.MAT_KR + 3] = np.where(smooth, tint, 0.0)
+    physical = rows[:, L.MAT_MODEL] != L.MODEL_CLASSIC
+    if physical.any():  # the lobe is the microfacet one: ks (a mirror's kr when α = 0) carries its tint
+        tint = rows[physical, L.MAT_TINT : L.MAT_TINT + 3]
+        smooth = (rows[physical, L.MAT_ALPHA] + rows[physical, L.MAT_ALPHA + 1] == 0.0)[:, None]
+        rows[physical, L.MAT_KT : L.MAT_KT + 3] = 0.0
+        metal = rows[physical, L.MAT_MODEL] == L.MODEL_CONDUCTOR  # (a plastic keeps kd: its base)
+        rows[np.flatnonzero(physical)[metal], L.MAT_KD : L.MAT_KD + 3] = 0.0
+        rows[physical, L.MAT_KS : L.MAT_KS + 3] = np.where(smooth, 0.0, tint)
+        rows[physical, L.MAT_KR : L.MAT_KR + 3] = np.where(smooth, tint, 0.0)
     for i, row in enumerate(rows):
+        if physical[i]:
+            continue  # energy is the model's own: a plastic's kd + its coat's tint may pass 1
         total = sum(row[c : c + 3] for c in (L.MAT_KD, L.MAT_KS, L.MAT_KR, L.MAT_KT))
         worst = float(np.max(total))
         if worst > 1.0 + 1e-9:

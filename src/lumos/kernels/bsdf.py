@@ -7,8 +7,12 @@
               + kt·(smooth dielectric of index ior)     Fresnel-weighted reflection and refraction
 
 A metal (MODEL_CONDUCTOR) replaces the Phong lobe by a GGX microfacet lobe with the conductor's Fresnel factor
-(`kernels.microfacet`), ks its tint; a smooth one is the mirror lobe weighted by that Fresnel factor. The glossy
-lobe's parameters travel as one tuple (`glossy_lobe`).
+(`kernels.microfacet`), ks its tint; a smooth one is the mirror lobe weighted by that Fresnel factor. A plastic
+(MODEL_PLASTIC) is a Lambertian base of albedo kd under a dielectric coat of index η: the coat reflects by a GGX
+lobe (or the mirror lobe) with the dielectric's Fresnel factor, and the base's light is what the coat lets in and
+out, t(cos θi)·t(cos θo)·kd/(π·η²·(1 − Fdr)), t = 1 − the coat's directional reflectance and Fdr its internal
+diffuse reflectance (the tables `compile.plastic` writes into the row), as Mitsuba 3's `roughplastic` reads it.
+The functions take the material row `mat` for these parameters.
 
 The first two are the smooth part (`eval_smooth`); the last two are delta lobes, reached only by sampling.
 `sample_*` functions return the sampled direction with its pdf (solid angle), so each sampler can be checked
@@ -22,7 +26,19 @@ All vectors are unit tuples; `n` is the shading normal on the side of wo (wo·n 
 import math
 
 from .jit import njit, njit_inline
-from .layout import MAT_ALPHA, MAT_ETA, MAT_K, MAT_MODEL, MAT_SHININESS, MODEL_CONDUCTOR
+from .layout import (
+    MAT_ALPHA,
+    MAT_COAT,
+    MAT_COAT_SIZE,
+    MAT_ETA,
+    MAT_FDR,
+    MAT_K,
+    MAT_MODEL,
+    MAT_SHININESS,
+    MODEL_CLASSIC,
+    MODEL_CONDUCTOR,
+    MODEL_PLASTIC,
+)
 from .microfacet import eval_ggx, fresnel_conductor, sample_ggx
 from .sampling import turn
 from .vec import dot, madd, mul, orthonormal_basis
@@ -59,19 +75,27 @@ def conserve_energy(kd, ks, kr, kt):
 
 
 @njit_inline
-def glossy_lobe(mat):
-    """The glossy lobe of a material row, one tuple: (Phong exponent, model, αu, αv, η rgb, k rgb)."""
-    return (mat[MAT_SHININESS], mat[MAT_MODEL], mat[MAT_ALPHA], mat[MAT_ALPHA + 1], mat[MAT_ETA], mat[MAT_ETA + 1],
-            mat[MAT_ETA + 2], mat[MAT_K], mat[MAT_K + 1], mat[MAT_K + 2])
+def surface_fresnel(mat, cos_o):
+    """The Fresnel factor per channel of a physical model's lobe at cos_o = wo·h (a metal's complex one, a
+    plastic coat's dielectric one); 1 for the classic model, whose coefficients are the lobe's weight."""
+    model = mat[MAT_MODEL]
+    if model == MODEL_CONDUCTOR:
+        return (fresnel_conductor(cos_o, mat[MAT_ETA], mat[MAT_K]),
+                fresnel_conductor(cos_o, mat[MAT_ETA + 1], mat[MAT_K + 1]),
+                fresnel_conductor(cos_o, mat[MAT_ETA + 2], mat[MAT_K + 2]))
+    if model == MODEL_PLASTIC:
+        f = fresnel_dielectric(max(cos_o, 0.0), 1.0 / mat[MAT_ETA])[0]
+        return f, f, f
+    return 1.0, 1.0, 1.0
 
 
 @njit_inline
-def mirror_fresnel(lobe, cos_o):
-    """The Fresnel factor per channel of a smooth metal's mirror lobe at incidence cos_o (1 for the classic kr)."""
-    if lobe[1] != MODEL_CONDUCTOR:
-        return 1.0, 1.0, 1.0
-    return (fresnel_conductor(cos_o, lobe[4], lobe[7]), fresnel_conductor(cos_o, lobe[5], lobe[8]),
-            fresnel_conductor(cos_o, lobe[6], lobe[9]))
+def coat_transmittance(mat, cos_t):
+    """A plastic coat's t(cos θ) = 1 − its directional reflectance, from the row's table (linear in cos θ)."""
+    x = min(max(cos_t, 0.0), 1.0) * (MAT_COAT_SIZE - 1)
+    i = min(int(x), MAT_COAT_SIZE - 2)
+    w = x - i
+    return (1.0 - w) * mat[MAT_COAT + i] + w * mat[MAT_COAT + i + 1]
 
 
 @njit
@@ -81,24 +105,31 @@ def mirror(wo, n):
 
 
 @njit_inline
-def eval_smooth(kd, ks, lobe, p_d, p_s, n, wo, wi):
+def eval_smooth(kd, ks, mat, p_d, p_s, n, wo, wi):
     """The smooth part of the BSDF for the pair (wo, wi): (f_diffuse rgb, f_glossy rgb, pdf of wi).
 
-    f_diffuse = kd/π and f_glossy = ks·(n+2)/(2π)·cosⁿα (n = lobe[0]), or ks times a metal's GGX lobe, both 0
-    where wi is below the surface (n·wi <= 0); pdf is the mixture p_d·cosθ/π + p_s·pdf_glossy with which
-    `sample_cosine` and `sample_phong` (or `microfacet.sample_ggx`) draw wi."""
+    f_diffuse = kd/π (under a plastic's coat, times what the coat lets through) and f_glossy =
+    ks·(n+2)/(2π)·cosⁿα (n the row's shininess), or ks times a metal's or a coat's GGX lobe, both 0 where wi is
+    below the surface (n·wi <= 0); pdf is the mixture p_d·cosθ/π + p_s·pdf_glossy with which `sample_cosine` and
+    `sample_phong` (or `microfacet.sample_ggx`) draw wi."""
     cos_i = dot(n, wi)
     if cos_i <= 0.0:
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0
+    model = mat[MAT_MODEL]
     pdf = p_d * cos_i * _INV_PI
-    fd = (kd[0] * _INV_PI, kd[1] * _INV_PI, kd[2] * _INV_PI)
+    c = _INV_PI
+    if model == MODEL_PLASTIC:  # the light the coat lets in and out, and the base's inter-reflection under it
+        eta = mat[MAT_ETA]
+        c *= coat_transmittance(mat, cos_i) * coat_transmittance(mat, dot(n, wo)) / (eta * eta * (1.0 - mat[MAT_FDR]))
+    fd = (kd[0] * c, kd[1] * c, kd[2] * c)
     fs = (0.0, 0.0, 0.0)
-    if p_s > 0.0 and lobe[1] == MODEL_CONDUCTOR:
-        f, pdf_g = eval_ggx(lobe, n, wo, wi)
-        fs = (ks[0] * f[0], ks[1] * f[1], ks[2] * f[2])
+    if p_s > 0.0 and model != MODEL_CLASSIC:
+        g, pdf_g, o_h = eval_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, wi)
+        f = surface_fresnel(mat, o_h)
+        fs = (ks[0] * g * f[0], ks[1] * g * f[1], ks[2] * g * f[2])
         pdf += p_s * pdf_g
     elif p_s > 0.0:
-        exponent = lobe[0]
+        exponent = mat[MAT_SHININESS]
         cos_a = dot(mirror(wo, n), wi)
         if cos_a > 0.0:
             lobe = cos_a**exponent
@@ -135,18 +166,18 @@ def sample_phong(axis, exponent, u1, u2):
 
 
 @njit_inline
-def sample_smooth(kd, ks, lobe, p_d, p_s, n, wo, u_lobe, u1, u2):
+def sample_smooth(kd, ks, mat, p_d, p_s, n, wo, u_lobe, u1, u2):
     """A direction from the smooth part of the BSDF: the diffuse lobe when u_lobe < p_d, else the glossy lobe
-    (u_lobe < p_d + p_s: Phong about the mirror direction, or a metal's visible GGX normals), with the mixture pdf
-    of `eval_smooth`. Returns (wi, f·cos/pdf as rgb, pdf); pdf = 0 when the direction falls below the surface
-    (the lobe reaches past it)."""
+    (u_lobe < p_d + p_s: Phong about the mirror direction, or the visible GGX normals of a metal or a coat), with
+    the mixture pdf of `eval_smooth`. Returns (wi, f·cos/pdf as rgb, pdf); pdf = 0 when the direction falls below
+    the surface (the lobe reaches past it)."""
     if u_lobe < p_d:
         wi = sample_cosine(n, u1, u2)
-    elif lobe[1] == MODEL_CONDUCTOR:
-        wi = sample_ggx(lobe, n, wo, u1, u2)
+    elif mat[MAT_MODEL] != MODEL_CLASSIC:
+        wi = sample_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, u1, u2)
     else:
-        wi = sample_phong(mirror(wo, n), lobe[0], u1, u2)
-    fd, fs, pdf = eval_smooth(kd, ks, lobe, p_d, p_s, n, wo, wi)
+        wi = sample_phong(mirror(wo, n), mat[MAT_SHININESS], u1, u2)
+    fd, fs, pdf = eval_smooth(kd, ks, mat, p_d, p_s, n, wo, wi)
     if not pdf > 0.0:
         return wi, (0.0, 0.0, 0.0), 0.0
     k = dot(n, wi) / pdf

@@ -53,13 +53,19 @@ MAT_ONE_SIDED = 25  # 1.0: its emission leaves the front only (the side the geom
 # read; for a conductor the compile step derives them from these): MODEL_CLASSIC or MODEL_CONDUCTOR
 MAT_MODEL = 26
 MAT_ALPHA = 27  # GGX widths (αu, αv) along the tangent frame's two axes (`kernels.microfacet`)
-MAT_ETA = 29  # conductor: the real part of the complex index of refraction, per channel (0: a perfect reflector)
+MAT_ETA = 29  # conductor: the real part of the complex index of refraction, per channel (0: a perfect reflector);
+# plastic: MAT_ETA alone, the coat's index (inside over outside)
 MAT_K = 32  # conductor: its imaginary part (extinction), per channel
-MAT_TINT = 35  # conductor: a factor on its reflectance, per channel (Mitsuba's specular_reflectance)
-MAT_SIZE = 38
+MAT_TINT = 35  # conductor, plastic: a factor on the lobe's reflectance per channel (Mitsuba's specular_reflectance)
+MAT_FDR = 38  # plastic: the coat's internal diffuse reflectance (light from the base sent back down to it)
+# plastic: MAT_COAT_SIZE values of t(cos θ) = 1 − the coat's directional reflectance, at cos θ = i/(size − 1)
+MAT_COAT = 39
+MAT_COAT_SIZE = 64
+MAT_SIZE = MAT_COAT + MAT_COAT_SIZE
 
 MODEL_CLASSIC = 0  # kd, ks/shininess, kr, kt read as kernels.bsdf says
 MODEL_CONDUCTOR = 1  # a metal: GGX microfacets (a mirror when α = 0) with the Fresnel factor of η + ik
+MODEL_PLASTIC = 2  # kd under a dielectric coat of index MAT_ETA: GGX microfacets (a mirror when α = 0)
 
 # Light kinds and columns. Kinds up to LIGHT_DIRECTIONAL are delta lights (one direction per shading point, no
 # random samples); the kinds above them are area lights.

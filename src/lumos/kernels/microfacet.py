@@ -98,15 +98,15 @@ def local(v, t, b, n):
 
 
 @njit_inline
-def eval_ggx(lobe, n, wo, wi):
-    """The GGX conductor lobe for the pair (wo, wi) about the shading normal n: (f per channel, without the
-    lobe's colour factor ks; pdf of wi under `sample_ggx`). `lobe` as `bsdf.glossy_lobe`."""
-    au, av = lobe[2], lobe[3]
+def eval_ggx(au, av, n, wo, wi):
+    """The GGX lobe for the pair (wo, wi) about the shading normal n, without its Fresnel factor:
+    (D·G1(wo)·G1(wi)/(4·cos θo·cos θi), the pdf of wi under `sample_ggx`, wo·h) — the caller multiplies by F(wo·h)
+    (a conductor's or a dielectric coat's)."""
     t, b = orthonormal_basis(n)
     ox, oy, oz = local(wo, t, b, n)
     ix, iy, iz = local(wi, t, b, n)
     if oz <= 0.0 or iz <= 0.0:
-        return (0.0, 0.0, 0.0), 0.0
+        return 0.0, 0.0, 1.0
     hx, hy, hz = ox + ix, oy + iy, oz + iz
     inv = 1.0 / math.sqrt(hx * hx + hy * hy + hz * hz)
     hx, hy, hz = hx * inv, hy * inv, hz * inv
@@ -114,18 +114,15 @@ def eval_ggx(lobe, n, wo, wi):
     d = ggx_d(hx, hy, hz, au, av)
     g1o = smith_g1(ox, oy, oz, o_h, au, av)
     g = g1o * smith_g1(ix, iy, iz, o_h, au, av)  # (wi·h = wo·h for the reflection half-vector)
-    pdf = g1o * d / (4.0 * oz)
-    c = d * g / (4.0 * oz * iz)
-    return (c * fresnel_conductor(o_h, lobe[4], lobe[7]), c * fresnel_conductor(o_h, lobe[5], lobe[8]),
-            c * fresnel_conductor(o_h, lobe[6], lobe[9])), pdf
+    return d * g / (4.0 * oz * iz), g1o * d / (4.0 * oz), o_h
 
 
 @njit_inline
-def sample_ggx(lobe, n, wo, u1, u2):
+def sample_ggx(au, av, n, wo, u1, u2):
     """A direction reflected about a microfacet normal visible from wo; its pdf is `eval_ggx`'s."""
     t, b = orthonormal_basis(n)
     ox, oy, oz = local(wo, t, b, n)
-    hx, hy, hz = sample_visible_normal(ox, oy, max(oz, 1e-9), lobe[2], lobe[3], u1, u2)
+    hx, hy, hz = sample_visible_normal(ox, oy, max(oz, 1e-9), au, av, u1, u2)
     k = 2.0 * (ox * hx + oy * hy + oz * hz)
     lx, ly, lz = k * hx - ox, k * hy - oy, k * hz - oz
     return (lx * t[0] + ly * b[0] + lz * n[0], lx * t[1] + ly * b[1] + lz * n[1], lx * t[2] + ly * b[2] + lz * n[2])

@@ -14,7 +14,8 @@ bounces after the first hit, as whitted does: emission is gathered at vertices 0
 0 … D (D = 0: direct light only; Mitsuba's and pbrt's max_depth is D + 2); unset, paths are unbounded.
 
 Materials are read physically (`kernels.bsdf`): kd Lambertian, ks/shininess a normalised Phong lobe, kr a mirror,
-a `conductor` a GGX microfacet lobe with the complex Fresnel factor (`kernels.microfacet`), kt/ior a smooth
+a `conductor` a GGX microfacet lobe with the complex Fresnel factor (`kernels.microfacet`), a `plastic` kd under a
+clear coat (GGX lobe with the dielectric Fresnel factor over the base seen through it), kt/ior a smooth
 dielectric with exact Fresnel (nested media as in whitted; a transparent surface that is not a
 solid is a thin sheet that lets kt through unbent). ka and the scene's ambient are ignored. Shadow rays stop at
 every surface: light through glass (caustics) is found by BSDF sampling alone.
@@ -38,21 +39,20 @@ from ..compile.camera import camera_arrays
 from ..kernels.bsdf import (
     conserve_energy,
     eval_smooth,
-    glossy_lobe,
     lobe_probs,
     mirror,
-    mirror_fresnel,
     power_heuristic,
     power_heuristic_over,
     sample_dielectric,
     sample_smooth,
+    surface_fresnel,
 )
 from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit, occluded
 from ..kernels.emitters import emitter_pdf, sample_emitter
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
-from ..kernels.layout import CAM_APERTURE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_ONE_SIDED
+from ..kernels.layout import CAM_APERTURE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_MODEL, MAT_ONE_SIDED, MODEL_CLASSIC
 from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
 from ..kernels.sobol import pair_seed, sobol_block
 from ..kernels.sampling import truncated_gaussian
@@ -229,7 +229,9 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
             n_sh = bump_normal(tex, mat, u, v, p, n_sh, dpdu, dpdv)
         n_s = shading_side(n_sh, n_geo, wo)
         n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
-        kd, ks, kr, kt = conserve_energy(kd, ks, kr, (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2]))
+        kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
+        if mat[MAT_MODEL] == MODEL_CLASSIC:  # (a physical model conserves energy by its own construction)
+            kd, ks, kr, kt = conserve_energy(kd, ks, kr, kt)
         p_d, p_s, p_r, p_t = lobe_probs(kd, ks, kr, kt)
         if depth == 0:
             albedo = (min(kd[0] + ks[0] + kr[0] + kt[0], 1.0), min(kd[1] + ks[1] + kr[1] + kt[1], 1.0),
@@ -237,7 +239,6 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
             normal = n_s
         if p_d + p_s + p_r + p_t == 0.0:
             break  # black: nothing leaves
-        lobe = glossy_lobe(mat)
         dim = DIM_PATH + depth * DIM_VERTEX
         pair = PAIR_PATH + depth * PAIRS_VERTEX
         # one pair picks the lobe and the emitter; with a single lobe that is not glass (whose pair also decides
@@ -250,7 +251,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         # stage 4: next-event estimation (the smooth lobes only: a mirror or glass cannot meet a light sample)
         if p_d + p_s > 0.0:
             ul1, ul2 = _draw2(sampler, points, col, key, pair + 2, dim + 4)
-            c0, c1, c2, w, seen, extra = _next_event(geo, surf, lit, em, p, n_geo, n_s, n_g, wo, kd, ks, lobe, p_d,
+            c0, c1, c2, w, seen, extra = _next_event(geo, surf, lit, em, p, n_geo, n_s, n_g, wo, kd, ks, mat, p_d,
                                                      p_s, u_pick, ul1, ul2, mode, stack, stack_t, time)
             rays += extra
             if seen:
@@ -263,7 +264,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         u1, u2 = _draw2(sampler, points, col, key, pair + 1, dim + 2)
         p_smooth = p_d + p_s
         if u_lobe < p_smooth:
-            wi, (w0, w1, w2), pdf = sample_smooth(kd, ks, lobe, p_d, p_s, n_s, wo, u_lobe, u1, u2)
+            wi, (w0, w1, w2), pdf = sample_smooth(kd, ks, mat, p_d, p_s, n_s, wo, u_lobe, u1, u2)
             if not pdf > 0.0 or n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] <= 0.0:
                 break
             prev_delta = False
@@ -272,7 +273,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
             wi = mirror(wo, n_s)
             if n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] <= 0.0:
                 break
-            f0, f1, f2 = mirror_fresnel(lobe, n_s[0] * wo[0] + n_s[1] * wo[1] + n_s[2] * wo[2])
+            f0, f1, f2 = surface_fresnel(mat, n_s[0] * wo[0] + n_s[1] * wo[1] + n_s[2] * wo[2])
             inv_p = 1.0 / p_r
             w0, w1, w2 = kr[0] * f0 * inv_p, kr[1] * f1 * inv_p, kr[2] * f2 * inv_p
             prev_delta = True
@@ -321,7 +322,7 @@ def _emission_weight(em, lit, surf, ref, light, part, prev_p, d, t, n_geo, time,
 
 
 @njit_inline
-def _next_event(geo, surf, lit, em, p, n_geo, n_s, n_g, wo, kd, ks, lobe, p_d, p_s, u_pick, ul1, ul2, mode, stack,
+def _next_event(geo, surf, lit, em, p, n_geo, n_s, n_g, wo, kd, ks, mat, p_d, p_s, u_pick, ul1, ul2, mode, stack,
                 stack_t, time):
     """Next-event estimation at p: an emitter sampled (u_pick, ul1, ul2), the smooth lobes evaluated towards
     it, a shadow ray, MIS against BSDF sampling. Returns (its unweighted contribution
@@ -332,7 +333,7 @@ def _next_event(geo, surf, lit, em, p, n_geo, n_s, n_g, wo, kd, ks, lobe, p_d, p
     cos_i = n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]
     if not (cos_i > 0.0 and n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] > 0.0):
         return 0.0, 0.0, 0.0, 0.0, False, 0
-    fd, fs, pdf_bsdf = eval_smooth(kd, ks, lobe, p_d, p_s, n_s, wo, wi)
+    fd, fs, pdf_bsdf = eval_smooth(kd, ks, mat, p_d, p_s, n_s, wo, wi)
     c0 = (fd[0] * led[0] + fs[0] * les[0]) * cos_i
     c1 = (fd[1] * led[1] + fs[1] * les[1]) * cos_i
     c2 = (fd[2] * led[2] + fs[2] * les[2]) * cos_i

@@ -95,6 +95,34 @@ class Conductor(StrictModel):
         return {"ka": f0, "kd": zero, "ks": f0, "kr": zero, "shininess": phong_exponent(alpha)}
 
 
+class Plastic(StrictModel):
+    """A plastic, read physically: the material's `kd` as a Lambertian base under a dielectric coat of index
+    `ior` (inside over outside) whose surface is GGX microfacets of width `alpha` (0: smooth), as Mitsuba 3's
+    `roughplastic` (`plastic` when smooth): the coat reflects with its Fresnel factor (times `tint`), and the base
+    sees the light the coat lets in and sends out, with the light the coat reflects back down to it."""
+
+    alpha: NonNegative = 0.0
+    ior: Positive = 1.49
+    tint: ShareColor = (1.0, 1.0, 1.0)
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.alpha > 1.0:
+            raise ValueError(f"alpha must be at most 1 (a GGX width), got {self.alpha:g}")
+        if self.ior == 1.0:
+            raise ValueError("ior must differ from 1 (a coat of index 1 is no coat)")
+        return self
+
+    def classic(self) -> dict:
+        """What the local methods read for the coat: its head-on reflectance ((η−1)/(η+1))² as a mirror `kr`
+        (α below 0.01) or as a Phong lobe `ks` as wide as the GGX one."""
+        f0 = tuple(t * ((self.ior - 1.0) / (self.ior + 1.0)) ** 2 for t in self.tint)
+        zero = (0.0, 0.0, 0.0)
+        if self.alpha < 0.01:
+            return {"ks": zero, "kr": f0, "shininess": 1.0}
+        return {"ks": f0, "kr": zero, "shininess": phong_exponent(self.alpha)}
+
+
 def phong_exponent(alpha: float) -> float:
     """The Phong exponent whose lobe is about as wide as a GGX (or Beckmann) lobe of width α: Blinn-Phong
     n_B = 2/α² − 2 and a Phong lobe about the mirror direction of 4× narrower angle, n = n_B/4; in [1, 10⁴]."""
@@ -123,6 +151,15 @@ class Material(StrictModel):
     #: a metal read physically by `path` (GGX microfacets, complex Fresnel); the local methods read the classic
     #: coefficients it implies unless they are given (`conductor_classic`)
     conductor: Optional[Conductor] = None
+    #: a plastic (kd under a clear coat) read physically by `path`; the local methods read kd and the coat's
+    #: classic reading (`Plastic.classic`) unless given
+    plastic: Optional[Plastic] = None
+
+    @model_validator(mode="after")
+    def _one_model(self):
+        if self.conductor is not None and self.plastic is not None:
+            raise ValueError("give conductor or plastic, not both")
+        return self
 
     @field_validator("texture", mode="after")
     @classmethod
