@@ -158,8 +158,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     render = commands.add_parser("render", help="render a scene to an image", description="Render SCENE. "
                                  "Flags override the scene's render: block.")
-    render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json), or a model file (.obj, "
-                        ".gltf, .glb, .ply, .stl, .off) framed and lit by lumos")
+    render.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json; a Mitsuba 3 .xml or "
+                        "pbrt-v4 .pbrt scene), or a model file (.obj, .gltf, .glb, .ply, .stl, .off) framed and lit by "
+                        "lumos")
     render.add_argument("-o", "--output", metavar="OUT", help="image to write: .png, .exr, .pfm or .npy "
                         "(default: <scene name>.png in the current folder)")
     _render_flags(render)
@@ -185,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
                                      "the solution (.npz, for lumos render --method radiosity --solution) and/or "
                                      "the baked display mesh (.ply, .glb: per-vertex radiance as float attributes "
                                      "and sRGB colours).")
-    rsolve.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    rsolve.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml, .json; Mitsuba .xml, pbrt .pbrt)")
     rsolve.add_argument("-o", "--output", metavar="OUT.npz", help="the solution to write (default: <scene "
                         "name>.npz in the current folder, unless only --export is given)")
     rsolve.add_argument("--export", action="append", metavar="BAKED", help="also write the display mesh with "
@@ -209,7 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
     warm.set_defaults(run=run_warmup)
 
     info = commands.add_parser("info", help="print what a scene holds")
-    info.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    info.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml, .json; Mitsuba .xml, pbrt .pbrt)")
     info.set_defaults(run=run_info)
 
     compare = commands.add_parser("compare", help="error figures between two images (B is the reference)")
@@ -225,7 +226,7 @@ def build_parser() -> argparse.ArgumentParser:
                                   "transmitted weights, and how they add up to the pixel); for raster the polygon, "
                                   "its vertices (and their light, Gouraud), the interpolated normal, depth and "
                                   "coverage; for raycast the hit and its terms.")
-    explain.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    explain.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml, .json; Mitsuba .xml, pbrt .pbrt)")
     explain.add_argument("--pixel", type=int, nargs=2, metavar=("X", "Y"), required=True,
                          help="the pixel: column X and row Y, from the top left, from 0")
     explain.add_argument("--json", action="store_true", help="print one JSON object: value (the pixel's linear "
@@ -237,7 +238,7 @@ def build_parser() -> argparse.ArgumentParser:
                                 description="Render SCENE with each method (and each shading of raster) and "
                                 "write the renders as one labelled grid with their render times (and, with --reference, their "
                                 "errors against one of them).")
-    sheet.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    sheet.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml, .json; Mitsuba .xml, pbrt .pbrt)")
     sheet.add_argument("-o", "--output", metavar="OUT", help="sheet to write: .png or .jpg "
                        "(default: <scene name>-sheet.png in the current folder)")
     sheet.add_argument("--width", type=int, metavar="W", help="width of each render (default: the scene's, "

@@ -11,7 +11,7 @@ multiple importance sampling with the power heuristic (Veach & Guibas 1995):
 The path continues with the BSDF sample; after `RR_DEPTH` bounces Russian roulette ends it with probability
 1 − q, q = min(max throughput × η², 0.95), and reweights the survivors by 1/q (unbiased). `max_depth` D counts
 bounces after the first hit, as whitted does: emission is gathered at vertices 0 … D+1 and light sampled at
-0 … D (D = 0: direct light only; Mitsuba's and pbrt's max_depth is D + 2); unset, paths are unbounded.
+0 … D (D = 0: direct light only; Mitsuba's max_depth is D + 2, pbrt-v4's D + 1); unset, paths are unbounded.
 
 Materials are read physically (`kernels.bsdf`): kd Lambertian, ks/shininess a normalised Phong lobe, kr a mirror,
 a `conductor` a GGX microfacet lobe with the complex Fresnel factor (`kernels.microfacet`), a `plastic` kd under a

@@ -36,6 +36,11 @@ from .messages import format_path, format_validation_error, location, one_line, 
 from .model import Mesh, ModelInclude, Scene
 
 SCENE_SUFFIXES = (".yaml", ".yml", ".json")
+#: Other renderers' scene files, read into lumos's scene format: suffix -> (module under lumos.io, function). The
+#: function takes the file's Path and returns (data, lines): a scene dict as a YAML file would give it (mesh and
+#: image paths relative to the file's folder) and {key path tuple: line in the file} for the messages (or None);
+#: it raises LumosError `<file>:<line>: <what>` on bad input and warns (LumosWarning) once per stand-in.
+FOREIGN_SCENES = {".xml": ("mitsuba", "read_mitsuba"), ".pbrt": ("pbrt", "read_pbrt")}
 _TOP_KEYS = ", ".join(Scene.model_fields)
 
 
@@ -63,7 +68,10 @@ def load_scene(source: str | os.PathLike | dict, view: Optional[str] = None, up:
         name, path = os.fspath(source), Path(source).expanduser()
         if path.suffix.lower() in MODEL_FORMATS:
             return _model_scene(path, name, view, up)
-        data, lines = _read_file(path, name)
+        if path.suffix.lower() in FOREIGN_SCENES:
+            data, lines = _read_foreign(path, name)
+        else:
+            data, lines = _read_file(path, name)
     else:
         raise SceneError(f"load_scene() takes a file path or a dict, not {type(source).__name__}")
     if not isinstance(data, dict):
@@ -118,12 +126,31 @@ _YAML = "tag:yaml.org,2002:"
 _PLAIN_SCALARS = {_YAML + t for t in ("str", "int", "float", "bool", "null")}
 
 
+def _read_foreign(path: Path, name: str) -> tuple[Any, Optional[dict]]:
+    """A Mitsuba 3 or pbrt-v4 scene file read into lumos's scene format (FOREIGN_SCENES)."""
+    import importlib
+
+    if path.is_dir():
+        raise SceneError(f"{name}: is a folder, not a scene file")
+    if not path.is_file():
+        raise SceneError(f"{name}: no such file")
+    module, function = FOREIGN_SCENES[path.suffix.lower()]
+    read = getattr(importlib.import_module(f"..io.{module}", __package__), function)
+    try:
+        return read(path)
+    except LumosError as exc:
+        reason = one_line(str(exc))
+        for long in (str(path.resolve()), str(path)):  # the file as the user named it
+            reason = reason.replace(long, name)
+        raise SceneError(reason) from None
+
+
 def _read_file(path: Path, name: str) -> tuple[Any, dict]:
     if path.is_dir():
         raise SceneError(f"{name}: is a folder, not a scene file")
     if path.suffix.lower() not in SCENE_SUFFIXES:
-        raise SceneError(f"{name}: scene files must end in .yaml, .yml or .json, and model files in "
-                         f"{', '.join(MODEL_FORMATS)}")
+        raise SceneError(f"{name}: scene files must end in .yaml, .yml or .json (or be Mitsuba 3 .xml or pbrt-v4 "
+                         f".pbrt scenes), and model files in {', '.join(MODEL_FORMATS)}")
     try:
         raw = path.read_bytes()
     except FileNotFoundError:
