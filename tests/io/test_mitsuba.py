@@ -150,7 +150,7 @@ def test_spectra_as_mitsubas_rgb_variants_read_them(tmp_path):
       <emitter type="constant"><spectrum name="radiance" value="2"/></emitter>
       <shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="0.25"/></bsdf></shape>
       <shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value="360:1, 830:1"/></bsdf></shape>""")
-    np.testing.assert_allclose(data["background"], (2 * 1.204794, 2 * 0.948291, 2 * 0.908916), rtol=1e-6)
+    np.testing.assert_allclose(data["environment"]["color"], (2 * 1.204794, 2 * 0.948291, 2 * 0.908916), rtol=1e-6)
     assert data["objects"][0]["material"]["kd"] == [0.25] * 3
     np.testing.assert_allclose(data["objects"][1]["material"]["kd"], 1.0, atol=0.01)
 
@@ -425,7 +425,7 @@ def test_an_environment_map_stands_in_as_its_mean(tmp_path):
         data = read(tmp_path, '<emitter type="envmap"><string name="filename" value="sky.exr"/>'
                               '<float name="scale" value="0.5"/></emitter>')
     w = np.sin(np.pi * (np.arange(4) + 0.5) / 4)
-    np.testing.assert_allclose(data["background"], 0.5 * 2.0 * w[1:3].sum() / w.sum(), rtol=1e-6)
+    np.testing.assert_allclose(data["environment"]["color"], 0.5 * 2.0 * w[1:3].sum() / w.sum(), rtol=1e-6)
 
 
 # ------------------------------------------------------------------------------------------------ bad input

@@ -295,7 +295,7 @@ def test_point_distant_and_spot_lights_deliver_pbrts_irradiance(tmp_path):
 def test_infinite_light_is_the_background(tmp_path):
     data, lines, _ = read(tmp_path, 'LightSource "infinite" "rgb L" [0.2 0.3 0.4] "float scale" 2\n'
                           'LightSource "infinite"\nShape "sphere"\n')
-    assert data["background"] == pytest.approx([1.4, 1.6, 1.8]) and lines[("background",)] == 6
+    assert data["environment"]["color"] == pytest.approx([1.4, 1.6, 1.8]) and lines[("environment",)] == 6
 
 
 def test_shapes(tmp_path):

@@ -259,6 +259,17 @@ def compile_scene(scene) -> CompiledScene:
     return _assemble(scene, materials, shapes, tri_parts, lights, names)
 
 
+def _background(scene) -> np.ndarray:
+    """What rays that miss see in the methods that do not look the environment up: the background colour, or the
+    environment's mean radiance."""
+    env = getattr(scene, "environment", None)
+    if env is None:
+        return np.array(scene.background, dtype=np.float64)
+    from .environment import environment_image, mean_radiance
+
+    return mean_radiance(environment_image(env))
+
+
 def _material_names(scene, materials: _Materials) -> list[str]:
     """A name for each material row, for messages: its key in `materials:` or the object that holds it inline."""
     names = {id(m): repr(name) for name, m in scene.materials.items()}
@@ -371,7 +382,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         light_vecs=light_vecs,
         light_scalars=light_scalars,
         ambient=np.array(scene.ambient, dtype=np.float64),
-        background=np.array(scene.background, dtype=np.float64),
+        background=_background(scene),
         csg_nodes=np.asarray(getattr(shapes, "csg_nodes", np.zeros((0, 4), np.int32)), np.int32).reshape(-1, 4),
         tex_info=tex_info,
         tex_pixels=tex_pixels,

@@ -15,6 +15,7 @@ the mean of the RGB channels:
     point light                      4π·r²·π·I/att(r) at r = half the radius of the scene's bounds
     spot light                       the same with Ω = ∫ falloff dω in place of 4π (`spot_solid_angle`)
     directional light                π·I·π·R² (R the radius of the scene's bounds)
+    environment                      π·L̄·π·R² (L̄ its mean radiance: `compile.environment`)
 The last two are estimates (a delta light's power depends on the scene); any positive weights give the same
 image in expectation, these only make the noise smaller where lights of different kinds meet.
 """
@@ -120,8 +121,11 @@ def _uniform_scale(m: np.ndarray) -> bool:
     return bool(np.allclose(g, s * np.eye(3), rtol=1e-9, atol=1e-12 * max(s, 1e-300)))
 
 
-def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
-    """The emitter table of a compiled scene (see the module doc)."""
+def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray, environment=None) -> L.Emitters:
+    """The emitter table of a compiled scene (see the module doc), with the scene's `environment` (a scene-model
+    Environment, or None) as one more entry."""
+    from .environment import environment_arrays, environment_power
+
     mats = arrays.materials
     lk, lv, ls = arrays.light_kind, arrays.light_vecs, arrays.light_scalars
     radius = 0.5 * float(np.linalg.norm(bounds[1] - bounds[0])) if len(bounds) else 1.0
@@ -200,6 +204,13 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
         shape_emit[s] = len(kinds)
         add(L.EMIT_SHAPE, int(s), np.pi * _mean(le) * area, area, part_areas / area, geom)
 
+    env_pixels, env_marginal, env_conditional, env_info = environment_arrays(environment)
+    if environment is not None:
+        env_power = environment_power(env_pixels, radius)
+        if env_power > 0.0:
+            env_info[L.ENV_ENTRY] = len(kinds)
+            add(L.EMIT_ENV, 0, env_power)
+
     power = np.asarray(powers, np.float64)
     total = power.sum()
     if len(power) and not total > 0.0:  # lights of zero power: none is worth a sample
@@ -222,19 +233,23 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray) -> L.Emitters:
         tri_emit=tri_emit,
         shape_emit=shape_emit,
         light_emit=light_emit,
+        env_pixels=env_pixels,
+        env_marginal=env_marginal,
+        env_conditional=env_conditional,
+        env_info=env_info,
     )
 
 
-def attach(compiled) -> None:
+def attach(compiled, environment=None) -> None:
     """Ready a compiled scene (`compile_scene`) for the path tracer: its material rows read physically
-    (`physical_materials`) and its emitter table (`CompiledScene.emitters`)."""
+    (`physical_materials`) and its emitter table (`CompiledScene.emitters`), the scene's `environment` in it."""
     rows = physical_materials(compiled.material_names, compiled.arrays.materials)
     compiled.arrays = compiled.arrays._replace(materials=rows)
     # emitters whose emission is textured are left to the BSDF rays (light sampling would need the texture at the
     # sampled point): the table is built as if they did not emit
     untextured = rows.copy()
     untextured[_textured_emission(rows, compiled.arrays.tex_info), L.MAT_EMISSION:L.MAT_EMISSION + 3] = 0.0
-    compiled.emitters = build_emitters(compiled.arrays._replace(materials=untextured), compiled.bounds)
+    compiled.emitters = build_emitters(compiled.arrays._replace(materials=untextured), compiled.bounds, environment)
 
 
 def _textured_emission(rows: np.ndarray, tex_info: np.ndarray) -> np.ndarray:

@@ -70,7 +70,7 @@ class SceneBuilder:
         if ctx.materials:
             self.data["materials"] = ctx.materials
         if np.any(self.background):
-            self.data["background"] = _vec(self.background)
+            self.data["environment"] = {"color": _vec(self.background)}  # path samples it as a light
         return self.data
 
     # ------------------------------------------------------------------------------------------- sensor
@@ -241,7 +241,7 @@ class SceneBuilder:
         return rgb
 
     def _add_background(self, rgb, node: Node) -> None:
-        self.ctx.at(("background",), node.where)
+        self.ctx.at(("environment",), node.where)
         self.background = self.background + np.asarray(rgb, np.float64)
         self.ctx.warn(("background",), node.where, f"{node.type}: the environment lights the scene in path "
                       f"(rays that escape see it); raycast, whitted and raster show it as the background colour only")

@@ -338,9 +338,9 @@ class _Reader:
                 lights.append(light)
             if sky is not None:
                 background += sky
-                lines[("background",)] = line
+                lines[("environment",)] = line
         if background.any():
-            data["background"] = [float(c) for c in background]
+            data["environment"] = {"color": [float(c) for c in background]}  # path samples it as a light
         objects: list = []
         variants = _Variants(materials)
         placed = [(rec, mirror @ rec.ctm, line) for rec, line in self.shapes]

@@ -22,9 +22,12 @@ import math
 
 import numpy as np
 
+from .. import config
+from .environment import env_radiance, env_sample
 from .illumination import sample_light, sphere_cone, sphere_cone_solid_angle
 from .jit import njit, njit_inline
 from .layout import (
+    EMIT_ENV,
     EMIT_LIGHT,
     EMIT_PARTS,
     EMIT_SPHERE,
@@ -158,6 +161,12 @@ def sample_emitter(em, lit, surf, p, u_pick, u1, u2, time):
             f = math.pi * w
             return wi, dist, mul(row3(vecs, LV_DIFFUSE), f), mul(row3(vecs, LV_SPECULAR), f), pmf, True
         return wi, dist, row3(vecs, LV_DIFFUSE), row3(vecs, LV_SPECULAR), pmf / (math.pi * w), False
+    if kind == EMIT_ENV:
+        wi, pdf = env_sample(em, u1, u2)
+        if not pdf > 0.0:
+            return _NO_SAMPLE
+        le = env_radiance(em, wi)
+        return wi, config.T_FAR, le, le, pmf * pdf, False
     if kind == EMIT_SPHERE:
         g = em.emit_geom[em.emit_slot[e]]
         wi, dist, solid_angle = sphere_cone((g[3, 0], g[3, 1], g[3, 2]), g[3, 3], p, u1, u2)

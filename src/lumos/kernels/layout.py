@@ -99,6 +99,15 @@ EMIT_LIGHT = 0  # a scene light (point, spot, directional or area; its light_kin
 EMIT_TRIANGLE = 1  # an emissive triangle, sampled uniformly by area; emit_ref: triangle index
 EMIT_SHAPE = 2  # an emissive analytic shape, sampled by area (see kernels.emitters); emit_ref: shape index
 EMIT_SPHERE = 3  # an emissive sphere of uniform scale, sampled in the cone it subtends; emit_ref: shape index
+EMIT_ENV = 4  # the environment, sampled by its image's radiance (kernels.environment); emit_ref: 0
+# Emitters.env_info columns (compile.environment)
+ENV_PRESENT = 0  # 1.0 when the scene has an environment
+ENV_COS = 1  # cos and sin of its rotation about +y
+ENV_SIN = 2
+ENV_WIDTH = 3
+ENV_HEIGHT = 4
+ENV_ENTRY = 5  # its entry in the emitter table (−1: none)
+ENV_INFO_SIZE = 6
 EMIT_PARTS = 6  # columns of emit_parts: one probability per part (face) of a shape
 
 # Camera: cam_vecs float64 (4, 3) = position, u, v, w; cam_params float64 (CAM_SIZE,)
@@ -211,6 +220,10 @@ Emitters = namedtuple(
         "tri_emit",  # int32 (nt,): entry of each triangle, -1 if it does not emit
         "shape_emit",  # int32 (ns,): entry of each shape, -1 if it is not sampled
         "light_emit",  # int32 (nl,): entry of each light
+        "env_pixels",  # float32 (H, W, 3): the environment's lat-long radiance (1×1 black without one)
+        "env_marginal",  # float64 (H + 1,): CDF over its rows (compile.environment)
+        "env_conditional",  # float64 (H, W + 1): CDF over each row's pixels
+        "env_info",  # float64 (ENV_INFO_SIZE,): present, cos and sin of its rotation, W, H, its entry
     ],
 )
 #: Radiosity's patches (`compile.patches`), as the solvers' kernels read them (`kernels.radiosity`).

@@ -50,9 +50,20 @@ from ..kernels.bsdf import (
 from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit, occluded
 from ..kernels.emitters import emitter_pdf, sample_emitter
+from ..kernels.environment import env_pdf, env_radiance
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
-from ..kernels.layout import CAM_APERTURE, MAT_BUMP, MAT_IOR, MAT_KT, MAT_MODEL, MAT_ONE_SIDED, MODEL_CLASSIC
+from ..kernels.layout import (
+    CAM_APERTURE,
+    ENV_ENTRY,
+    ENV_PRESENT,
+    MAT_BUMP,
+    MAT_IOR,
+    MAT_KT,
+    MAT_MODEL,
+    MAT_ONE_SIDED,
+    MODEL_CLASSIC,
+)
 from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
 from ..kernels.sobol import pair_seed, sobol_block
 from ..kernels.sampling import truncated_gaussian
@@ -194,12 +205,13 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         hit = closest_visible_hit(geo, surf, lit, o, d, 0.0, config.T_FAR, stack, stack_t, time)
         rays += 1
         t = hit[0]
-        if t < 0.0:
-            L0 += b0 * background[0]
-            L1 += b1 * background[1]
-            L2 += b2 * background[2]
+        if t < 0.0:  # the background, or the environment (weighted against sampling it as a light)
+            bg, w = _missed(em, d, background, prev_delta, prev_pdf, mode)
+            L0 += b0 * bg[0] * w
+            L1 += b1 * bg[1] * w
+            L2 += b2 * bg[2] * w
             if depth <= 1:
-                D0, D1, D2 = D0 + b0 * background[0], D1 + b1 * background[1], D2 + b2 * background[2]
+                D0, D1, D2 = D0 + b0 * bg[0] * w, D1 + b1 * bg[1] * w, D2 + b2 * bg[2] * w
             break
         ref = hit[1]
         p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, o, d, t, ref, hit[2], hit[3], hit[4], time)
@@ -303,6 +315,22 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         o = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
         d = wi
     return (L0, L1, L2), rays, first_t, first_obj, albedo, normal, (e0, e1, e2), (D0, D1, D2)
+
+
+@njit_inline
+def _missed(em, d, background, prev_delta, prev_pdf, mode):
+    """What a ray that leaves the scene along d finds: the environment's radiance there with its MIS weight against
+    the environment's light samples (1 after the camera, a mirror or glass), or the background colour (weight 1)."""
+    if em.env_info[ENV_PRESENT] == 0.0:
+        return (background[0], background[1], background[2]), 1.0
+    le = env_radiance(em, d)
+    e = np.int64(em.env_info[ENV_ENTRY])
+    if prev_delta or mode == MODE_BSDF or e < 0:
+        return le, 1.0
+    pdf_light = em.emit_pmf[e] * env_pdf(em, d)
+    if not pdf_light > 0.0:
+        return le, 1.0
+    return le, 0.0 if mode == MODE_LIGHT else power_heuristic(prev_pdf, pdf_light)
 
 
 @njit_inline

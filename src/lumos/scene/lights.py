@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, Optional, Union
 
-from pydantic import Discriminator, Field, Tag, field_validator, model_validator
+from pydantic import Discriminator, Field, PrivateAttr, Tag, field_validator, model_validator
 
 from .materials import MaterialRef
 from .types import Color, Direction, NonNegative, Positive, StrictModel, Vec3, cross, norm
@@ -156,3 +156,23 @@ Light = Annotated[
     ),
 ]
 LIGHT_TYPES = ("point", "spot", "directional", "area")
+
+
+class Environment(StrictModel):
+    """Light from every direction at infinity: a lat-long (equirectangular) image `file` (EXR, PFM, NPY: linear
+    radiance; PNG, JPEG: sRGB, decoded) or a constant `color`, times `scale`, turned `rotation` degrees about +y
+    (counter-clockwise seen from above). The image's top row is straight up (+y), its bottom row straight down;
+    its middle column looks along −z, the column a quarter further right along +x (u = 1/2 + atan2(x, −z)/2π,
+    v = acos(y)/π)."""
+
+    file: Optional[str] = None
+    color: Optional[Color] = None
+    scale: Color = (1.0, 1.0, 1.0)
+    rotation: Annotated[float, Field(allow_inf_nan=False)] = 0.0
+    _path: Any = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _check(self):
+        if (self.file is None) == (self.color is None):
+            raise ValueError("give the environment a file (a lat-long image) or a color, one of them")
+        return self

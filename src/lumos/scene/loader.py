@@ -297,7 +297,13 @@ def _load_meshes(scene: Scene, folder: Path, name: str, lines: Optional[dict]) -
 
 
 def _resolve_texture_files(scene: Scene, folder: Path, name: str, lines: Optional[dict]) -> None:
-    """Image textures and bump maps name files relative to the scene's folder; each must exist."""
+    """Image textures, bump maps and the environment name files relative to the scene's folder; each must exist."""
+    env = getattr(scene, "environment", None)  # (a stand-in namespace of an include has none)
+    if env is not None and env.file is not None:
+        path = (folder / Path(env.file).expanduser()).resolve()
+        if not path.is_file():
+            raise SceneError(f"{location(name, lines, ('environment', 'file'))}: no such image file {env.file!r}")
+        env._path = path
     materials = [(("materials", key), m) for key, m in scene.materials.items()]
     for i, top in enumerate(scene.objects):
         for obj, at in _solids(top, ("objects", i)):

@@ -57,6 +57,7 @@ from .objects import (
 from .lights import (
     DirectionalLight,
     DiskLight,
+    Environment,
     LIGHT_TYPES,
     Light,
     PointLight,
@@ -79,6 +80,7 @@ __all__ = [
     "DirectionalLight",
     "Disk",
     "DiskLight",
+    "Environment",
     "LIGHT_TYPES",
     "Light",
     "Material",
@@ -119,6 +121,8 @@ class Scene(StrictModel):
     ambient: Color = (0.0, 0.0, 0.0)
     background: Color = (0.0, 0.0, 0.0)
     lights: list[Light] = Field(default_factory=list)
+    #: light from every direction (an image or a constant): what rays that miss see, and, in `path`, a light
+    environment: Optional[Environment] = None
     materials: dict[str, Material] = Field(default_factory=dict)
     objects: list[Object] = Field(default_factory=list)
     _source: Optional[Path] = PrivateAttr(default=None)
@@ -126,6 +130,13 @@ class Scene(StrictModel):
     _included: list = PrivateAttr(default_factory=list)
     #: the scene was made up for a bare model file (`lumos render model.obj`): its camera, lights and method
     _made_for_model: bool = PrivateAttr(default=False)
+
+    @model_validator(mode="after")
+    def _check_environment(self):
+        if self.environment is not None and "background" in self.model_fields_set:
+            raise ValueError("give background (one colour) or environment, not both: the environment is what rays "
+                             "that miss see")
+        return self
 
     @model_validator(mode="after")
     def _check_material_names(self):

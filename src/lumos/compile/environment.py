@@ -1,0 +1,83 @@
+"""The environment as the kernels read it (`kernels.environment`): its lat-long image and the 2-D piecewise-constant
+distribution the path tracer samples directions from.
+
+    image = environment_image(env)                  # float32 (H, W, 3) radiance, scale applied (1×1 for a colour)
+    pixels, marginal, conditional, info = environment_arrays(env)
+    mean = mean_radiance(image)                     # what the methods without the environment see as background
+
+Pixel (i, j) covers v in [i/H, (i+1)/H) (θ = v·π from +y) and u in [j/W, (j+1)/W); it is drawn with probability
+proportional to its mean radiance times sin θ at its centre (the solid angle it covers), then a point uniform in
+it; the density per solid angle is p(i, j)·H·W / (2π²·sin θ) (Pharr, Jakob & Humphreys, §12.5).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import LumosError
+from ..kernels.layout import ENV_COS, ENV_ENTRY, ENV_HEIGHT, ENV_INFO_SIZE, ENV_PRESENT, ENV_SIN, ENV_WIDTH
+
+
+
+def environment_image(env) -> np.ndarray:
+    """float32 (H, W, 3): the environment's radiance (its image read as linear values, or its colour as 1×1), times
+    its scale."""
+    scale = np.asarray(env.scale, np.float32)
+    if env.color is not None:
+        return (np.asarray(env.color, np.float32) * scale).reshape(1, 1, 3)
+    from ..io.image_files import read_image
+
+    try:
+        image = read_image(env._path if env._path is not None else env.file)
+    except LumosError as exc:
+        raise LumosError(f"environment.file: {exc}") from None
+    if not np.isfinite(image).all() or (image < 0).any():
+        raise LumosError(f"environment.file: {env.file!r} has negative, NaN or infinite pixels")
+    return np.ascontiguousarray(image * scale, np.float32)
+
+
+def _solid_angle_weights(h: int) -> np.ndarray:
+    """sin θ at the centre of each row."""
+    return np.sin((np.arange(h) + 0.5) / h * np.pi)
+
+
+def mean_radiance(image: np.ndarray) -> np.ndarray:
+    """The environment's mean radiance over the sphere of directions (rows weighted by their solid angle)."""
+    w = _solid_angle_weights(image.shape[0])
+    return (image.astype(np.float64) * w[:, None, None]).sum(axis=(0, 1)) / (w.sum() * image.shape[1])
+
+
+def environment_arrays(env) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(pixels float32 (H, W, 3), marginal CDF float64 (H + 1,) over rows, conditional CDFs float64 (H, W + 1)
+    within each row, info float64 (ENV_INFO_SIZE,)); an empty 1×1 black environment when `env` is None."""
+    info = np.zeros(ENV_INFO_SIZE)
+    info[ENV_ENTRY] = -1.0
+    if env is None:
+        pixels = np.zeros((1, 1, 3), np.float32)
+    else:
+        pixels = environment_image(env)
+        info[ENV_PRESENT] = 1.0
+        a = np.radians(env.rotation)
+        info[ENV_COS], info[ENV_SIN] = np.cos(a), np.sin(a)
+    h, w = pixels.shape[:2]
+    info[ENV_WIDTH], info[ENV_HEIGHT] = w, h
+    weight = pixels.astype(np.float64).mean(axis=2) * _solid_angle_weights(h)[:, None]
+    row_sums = weight.sum(axis=1)
+    conditional = np.zeros((h, w + 1))
+    conditional[:, 1:] = np.cumsum(weight, axis=1)
+    nonzero = row_sums > 0
+    conditional[nonzero] /= row_sums[nonzero, None]
+    conditional[~nonzero, 1:] = np.arange(1, w + 1) / w  # a black row: uniform (never picked)
+    conditional[:, -1] = 1.0
+    marginal = np.zeros(h + 1)
+    marginal[1:] = np.cumsum(row_sums)
+    total = marginal[-1]
+    marginal = marginal / total if total > 0 else np.arange(h + 1) / h
+    marginal[-1] = 1.0
+    return pixels, marginal, conditional, info
+
+
+def environment_power(pixels: np.ndarray, radius: float) -> float:
+    """An estimate of the power the environment sends into the scene's bounding sphere of `radius`, for light
+    selection (as a directional light's: π·L̄·π·R², L̄ the mean radiance)."""
+    return float(np.pi * mean_radiance(pixels).mean() * np.pi * radius * radius)

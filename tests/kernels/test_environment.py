@@ -1,0 +1,154 @@
+"""The environment light (kernels/environment.py, compile/environment.py): lookups in the lat-long image, sampling
+that follows its density (χ²), and what `path` makes of it against closed forms."""
+
+import math
+
+import numba
+import numpy as np
+import pytest
+from chi2 import chi2_directions
+from helpers import interior_of
+
+import lumos
+from lumos.compile.emitters import build_emitters
+from lumos.compile.environment import environment_arrays, mean_radiance
+from lumos.kernels.environment import env_pdf, env_radiance, env_sample
+from lumos.scene.lights import Environment
+
+
+def table(image, rotation=0.0):
+    """An emitter table holding only the environment `image` (H, W, 3)."""
+    env2 = Environment(color=(1.0, 1.0, 1.0), rotation=rotation)
+    scene = lumos.load_scene({"objects": [{"type": "sphere"}]})
+    from lumos.compile import compile_scene
+
+    compiled = compile_scene(scene)
+    em = build_emitters(compiled.arrays, compiled.bounds, env2)
+    pixels, marginal, conditional, info2 = _arrays_of(image, rotation)
+    return em._replace(env_pixels=pixels, env_marginal=marginal, env_conditional=conditional,
+                       env_info=np.concatenate([info2[:5], [em.env_info[5]]]))
+
+
+def _arrays_of(image, rotation):
+    import lumos.compile.environment as E
+
+    original = E.environment_image
+    E.environment_image = lambda env: np.asarray(image, np.float32)
+    try:
+        return environment_arrays(Environment(color=(1.0, 1.0, 1.0), rotation=rotation))
+    finally:
+        E.environment_image = original
+
+
+@numba.njit(cache=True)
+def _samples(em, u):
+    out = np.full((u.shape[0], 3), np.nan)
+    for k in range(u.shape[0]):
+        d, pdf = env_sample(em, u[k, 0], u[k, 1])
+        if pdf > 0.0:
+            out[k, 0], out[k, 1], out[k, 2] = d
+    return out
+
+
+@numba.njit(cache=True)
+def _pdfs(em, dirs):
+    out = np.empty(dirs.shape[0])
+    for k in range(dirs.shape[0]):
+        out[k] = env_pdf(em, (dirs[k, 0], dirs[k, 1], dirs[k, 2]))
+    return out
+
+
+@numba.njit(cache=True)
+def _radiance(em, d):
+    return env_radiance(em, (d[0], d[1], d[2]))
+
+
+def sky(h=32, w=64, seed=0):
+    rng = np.random.default_rng(seed)
+    img = rng.random((h, w, 3)).astype(np.float32) * 0.5
+    img[5:8, 40:44] = 50.0  # a sun
+    img[h // 2:] *= 0.2
+    img[:, 3] = 0.0  # a black column: never drawn
+    return img
+
+
+@pytest.mark.parametrize("rotation", [0.0, 70.0])
+def test_environment_sampling_follows_its_pdf(rotation):
+    em = table(sky(), rotation)
+    frame = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])  # θ from +y
+    result = chi2_directions(lambda u: _samples(em, np.ascontiguousarray(u)),
+                             lambda d: _pdfs(em, np.ascontiguousarray(d)), frame=frame, sphere=True, seed=1)
+    assert result.p_value > 1e-3, result.message
+
+
+def test_the_pdf_integrates_to_one_and_is_zero_only_where_the_sky_is_black():
+    em = table(sky())
+    rng = np.random.default_rng(3)
+    d = rng.normal(size=(400_000, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    pdf = _pdfs(em, d)
+    assert 4 * math.pi * pdf.mean() == pytest.approx(1.0, abs=0.01)
+    lum = np.array([np.mean(_radiance(em, x)) for x in d[:2000]])
+    assert np.all((pdf[:2000] > 0) == (lum > 0))  # drawn wherever there is light, never where there is none
+
+
+def test_lat_long_orientation_and_rotation():
+    """The image's top row is +y, its middle column −z, the column a quarter to the right +x; rotation turns the
+    middle column from −z towards −x."""
+    h, w = 8, 16
+    img = np.zeros((h, w, 3), np.float32)
+    img[0, :, 0] = 1.0  # top row red
+    img[:, w // 2, 1] = 1.0  # middle column green
+    img[:, 3 * w // 4, 2] = 1.0  # a quarter to the right: blue
+    em = table(img)
+    assert _radiance(em, np.array([0.0, 1.0, 0.0]))[0] == 1.0
+    assert _radiance(em, np.array([0.0, 0.0, -1.0]))[1] == 1.0
+    assert _radiance(em, np.array([1.0, 0.0, 0.0]))[2] == 1.0
+    turned = table(img, rotation=90.0)
+    assert _radiance(turned, np.array([-1.0, 0.0, 0.0]))[1] == 1.0
+    assert _radiance(turned, np.array([0.0, 0.0, -1.0]))[1] == 0.0
+
+
+def test_a_white_furnace_under_a_constant_sky():
+    """A diffuse sphere of albedo 0.8 under a uniform environment of radiance 1 (nothing else) reflects 0.8 of it
+    at every point (a convex body sees only the sky); the sky itself is 1 where rays miss."""
+    img = lumos.render({"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 30},
+                        "render": {"width": 32, "height": 32, "method": "path", "spp": 64},
+                        "environment": {"color": 1.0},
+                        "objects": [{"type": "sphere", "radius": 1, "material": {"kd": 0.8}}]},
+                       aov=["variance", "object_id"], seed=2)
+    hit = interior_of(img.aovs["object_id"])  # (pixels on the silhouette also see the sky)
+    mean = img.array[hit].mean(axis=0)
+    err = np.sqrt(img.aovs["variance"][hit].sum(axis=0)) / hit.sum()
+    assert np.all(np.abs(mean - 0.8) < 4 * err + 1e-4), (mean, err)
+    np.testing.assert_allclose(img.array[:4, :4], 1.0)  # a corner: the sky itself
+
+
+def test_a_sun_in_the_environment_lights_a_floor_as_its_solid_angle_says():
+    """A black environment but for one bright block of pixels (a sun) over a diffuse floor of albedo ρ: the floor's
+    radiance is ρ/π·E, E = Σ L·∫cos θ dω over the block's pixels in closed form (per pixel Δφ·(sin²θ1 − sin²θ0)/2,
+    θ from the zenith), by light sampling and BSDF sampling together."""
+    h, w, L = 32, 64, 40.0
+    img = np.zeros((h, w, 3), np.float32)
+    rows, cols = slice(4, 7), slice(10, 14)
+    img[rows, cols] = L
+    np.save("/tmp/lumos_test_sun.npy", img)
+    theta = np.arange(h + 1) / h * np.pi
+    e = 0.0
+    for i in range(4, 7):
+        e += L * (cols.stop - cols.start) * (2 * np.pi / w) * (np.sin(theta[i + 1]) ** 2 - np.sin(theta[i]) ** 2) / 2
+    rho = 0.5
+    scene = {"camera": {"position": [0, 3, 0.01], "look_at": [0, 0, 0], "fov": 20},
+             "render": {"width": 16, "height": 16, "method": "path", "spp": 256, "max_depth": 0},
+             "environment": {"file": "/tmp/lumos_test_sun.npy"},
+             "objects": [{"type": "plane", "material": {"kd": rho}}]}
+    img = lumos.render(scene, aov=["variance"], seed=4)
+    mean = img.array.mean()
+    err = np.sqrt(img.aovs["variance"].sum()) / img.array.size * np.sqrt(3)
+    assert mean == pytest.approx(rho / np.pi * e, abs=4 * err), (mean, rho / np.pi * e, err)
+
+
+def test_mean_radiance_weights_rows_by_solid_angle():
+    img = np.zeros((4, 8, 3), np.float32)
+    img[:2] = 1.0  # the upper hemisphere
+    assert mean_radiance(img) == pytest.approx([0.5] * 3)
