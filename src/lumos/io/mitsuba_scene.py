@@ -47,6 +47,7 @@ class SceneBuilder:
         self.lights: list = []
         self.objects: list = []
         self.background = np.zeros(3)
+        self.envmap: Optional[dict] = None  # the environment of an envmap emitter
 
     def build(self, root: Node) -> dict:
         ctx = self.ctx
@@ -69,7 +70,12 @@ class SceneBuilder:
             self.data["objects"] = self.objects
         if ctx.materials:
             self.data["materials"] = ctx.materials
-        if np.any(self.background):
+        if self.envmap is not None:
+            if np.any(self.background):
+                ctx.warn(("constant and envmap",), root.where, "a constant emitter beside an envmap is left out (lumos "
+                         "has one environment)")
+            self.data["environment"] = self.envmap
+        elif np.any(self.background):
             self.data["environment"] = {"color": _vec(self.background)}  # path samples it as a light
         return self.data
 
@@ -216,9 +222,7 @@ class SceneBuilder:
         elif node.type == "constant":
             self._add_background(self._emitted(node, "radiance"), node)
         elif node.type == "envmap":
-            self._add_background(self._envmap_mean(node), node)
-            ctx.warn(("emitter", "envmap"), node.where, "envmap: environment maps are not supported yet; its mean "
-                     "radiance stands in as a uniform background")
+            self._envmap(node)
         else:
             what = "must be attached to a <shape>" if node.type == "area" else "is not supported"
             ctx.warn(("emitter", node.type), node.where, f"emitter '{node.type}' {what}; left out")
@@ -246,18 +250,35 @@ class SceneBuilder:
         self.ctx.warn(("background",), node.where, f"{node.type}: the environment lights the scene in path "
                       f"(rays that escape see it); raycast, whitted and raster show it as the background colour only")
 
-    def _envmap_mean(self, node: Node) -> tuple:
-        """The mean radiance of a latitude–longitude map (rows weighted by sin θ, their solid angle) × scale."""
+    def _envmap(self, node: Node) -> None:
+        """An envmap as lumos's image environment. Mitsuba's latitude–longitude map looks along −z at its left
+        edge (u = atan2(x, −z)/2π), lumos's at its middle column: the image is rolled by half its width (into a
+        .npy in the importers' cache folder). A `to_world` turning about +y is the environment's rotation (the
+        same sense in both)."""
+        from .gltf_materials import cache_folder
         from .image_files import read_image
 
+        ctx = self.ctx
+        if self.envmap is not None:
+            ctx.warn(("two envmaps",), node.where, "envmap: only the first environment map is read")
+            return
+        name, path = ctx.file(node)
         try:
-            _, path = self.ctx.file(node)
-            image = read_image(path).astype(np.float64)
-        except Exception:  # noqa: BLE001 - any unreadable map: black, and the warning says envmaps stand in
-            return (0.0, 0.0, 0.0)
-        weights = np.sin(np.pi * (np.arange(image.shape[0]) + 0.5) / image.shape[0])
-        mean = (image.mean(axis=1) * weights[:, None]).sum(axis=0) / weights.sum()
-        return tuple(float(c) for c in mean * node.float("scale", 1.0))
+            image = read_image(path)
+        except Exception as exc:  # noqa: BLE001 - a map that cannot be read is bad input, said in one line
+            raise node.where.error(f"envmap: {exc}") from None
+        m = node.transform("to_world")[:3, :3]
+        rotation = float(np.degrees(np.arctan2(m[0, 2], m[0, 0])))
+        turn = np.array([[np.cos(np.radians(rotation)), 0, np.sin(np.radians(rotation))], [0, 1, 0],
+                         [-np.sin(np.radians(rotation)), 0, np.cos(np.radians(rotation))]])
+        if not np.allclose(m, turn, atol=1e-6):
+            ctx.warn(("envmap", "to_world"), node.where, "envmap: only a to_world turning about +y is read (the "
+                     "rest of it is left out)")
+        out = cache_folder() / f"envmap-{len(list(cache_folder().glob('envmap-*')))}.npy"
+        np.save(out, np.ascontiguousarray(np.roll(image, image.shape[1] // 2, axis=1)))
+        ctx.at(("environment",), node.where)
+        scale = node.float("scale", 1.0)
+        self.envmap = {"file": str(out), "scale": scale, "rotation": rotation}
 
     # ------------------------------------------------------------------------------------------- shapes
 
