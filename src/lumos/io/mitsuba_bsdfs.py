@@ -21,6 +21,7 @@ from typing import Optional
 import numpy as np
 
 from ..errors import LumosError, LumosWarning
+from ..scene.materials import phong_exponent  # (the Phong lobe as wide as a microfacet one of width α)
 from .gltf_materials import shininess
 from .mitsuba_data import CONDUCTORS, IORS, conductor_reflectance, named_ior, spectrum_rgb, uniform_spectrum_rgb
 from .mitsuba_xml import Node, Spectrum, Value, Where, find_file
@@ -229,13 +230,6 @@ def nested_bsdf(node: Node, ctx: Context) -> Optional[Node]:
     if not inner:
         raise node.where.error(f"{node.label()} needs a nested <bsdf>")
     return inner[0]
-
-
-def phong_exponent(alpha: float) -> float:
-    """The Phong exponent of a microfacet roughness α (Beckmann; GGX of the same α has a peak as wide): the
-    Blinn–Phong exponent 2/α² − 2 of equal width (Walter et al. 2007), and a quarter of it for lumos's Phong
-    lobe about R (gltf_materials.shininess, which takes glTF's r = √α)."""
-    return shininess(math.sqrt(max(alpha, 0.0)))
 
 
 def _alpha(node: Node, ctx: Context) -> float:
