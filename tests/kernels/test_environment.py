@@ -152,3 +152,24 @@ def test_mean_radiance_weights_rows_by_solid_angle():
     img = np.zeros((4, 8, 3), np.float32)
     img[:2] = 1.0  # the upper hemisphere
     assert mean_radiance(img) == pytest.approx([0.5] * 3)
+
+
+@pytest.mark.parametrize("method", ["raycast", "whitted"])
+def test_the_ray_methods_see_the_environment_where_rays_leave(tmp_path, method):
+    """raycast and whitted look the image up where a ray leaves the scene: the camera ray along +x reads the
+    column a quarter right of the middle; whitted's mirror sphere ahead sends the centre ray back along −x, to the
+    column a quarter left of it."""
+    h, w = 8, 16
+    img = np.zeros((h, w, 3), np.float32)
+    img[:, :, 0] = (np.arange(w) + 1.0) / w  # red: the column
+    img[:, :, 1] = 0.5
+    np.save(tmp_path / "cols.npy", img)
+    scene = {"camera": {"position": [0, 0, 0], "look_at": [1, 0, 0], "fov": 5},
+             "render": {"width": 3, "height": 3, "method": method, "spp": 1},
+             "environment": {"file": str(tmp_path / "cols.npy")}}
+    centre = lumos.render(scene).array[1, 1]
+    np.testing.assert_allclose(centre, [13 / 16, 0.5, 0.0], rtol=1e-6)  # +x: u = 3/4, column 12
+    if method == "whitted":
+        scene["objects"] = [{"type": "sphere", "center": [3, 0, 0], "radius": 1, "material": {"kr": 1.0}}]
+        mirrored = lumos.render(scene).array[1, 1]
+        np.testing.assert_allclose(mirrored, [5 / 16, 0.5, 0.0], rtol=1e-6)  # −x: u = 1/4, column 4

@@ -349,6 +349,9 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
     prim_ref[~is_tri] = ~shape_ids.astype(np.int32)
 
     tex_info, tex_pixels = build_textures(materials)  # also fills the rows' MAT_TEXTURE / MAT_BUMP
+    from .environment import environment_arrays
+
+    env = environment_arrays(getattr(scene, "environment", None))  # what the ray methods' misses look up
     material_rows = materials.array()
     if n_shape:
         shape_mats = material_rows[shape_info[:, L.INFO_MATERIAL]]
@@ -383,6 +386,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         light_scalars=light_scalars,
         ambient=np.array(scene.ambient, dtype=np.float64),
         background=_background(scene),
+        env_pixels=env[0],
+        env_info=env[3],
         csg_nodes=np.asarray(getattr(shapes, "csg_nodes", np.zeros((0, 4), np.int32)), np.int32).reshape(-1, 4),
         tex_info=tex_info,
         tex_pixels=tex_pixels,

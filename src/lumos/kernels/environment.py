@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from .jit import njit, njit_inline
-from .layout import ENV_COS, ENV_HEIGHT, ENV_SIN, ENV_WIDTH
+from .layout import ENV_COS, ENV_HEIGHT, ENV_PRESENT, ENV_SIN, ENV_WIDTH
 
 _INV_2PI = 0.5 / math.pi
 
@@ -35,9 +35,8 @@ def _find(cdf, u):
 
 
 @njit_inline
-def _pixel(em, d):
+def _pixel(info, d):
     """(row, column, sin θ) of the pixel the world direction d falls in."""
-    info = em.env_info
     c, s = info[ENV_COS], info[ENV_SIN]
     x = c * d[0] - s * d[2]  # the environment turned back by its rotation
     z = s * d[0] + c * d[2]
@@ -50,9 +49,19 @@ def _pixel(em, d):
 
 
 @njit_inline
+def sky_radiance(pixels, info, background, d):
+    """What a ray leaving the scene along d sees: the environment's radiance from there (`info[ENV_PRESENT]`),
+    else the background colour."""
+    if info[ENV_PRESENT] == 0.0:
+        return np.float64(background[0]), np.float64(background[1]), np.float64(background[2])
+    i, j, _ = _pixel(info, d)
+    return np.float64(pixels[i, j, 0]), np.float64(pixels[i, j, 1]), np.float64(pixels[i, j, 2])
+
+
+@njit_inline
 def env_radiance(em, d):
     """The environment's radiance arriving from direction d (pointing away from the scene)."""
-    i, j, _ = _pixel(em, d)
+    i, j, _ = _pixel(em.env_info, d)
     px = em.env_pixels
     return np.float64(px[i, j, 0]), np.float64(px[i, j, 1]), np.float64(px[i, j, 2])
 
@@ -61,7 +70,7 @@ def env_radiance(em, d):
 def env_pdf(em, d):
     """The density per solid angle with which `env_sample` draws d (without the probability of picking the
     environment among the emitters)."""
-    i, j, sin_t = _pixel(em, d)
+    i, j, sin_t = _pixel(em.env_info, d)
     if not sin_t > 0.0:
         return 0.0
     m = em.env_marginal

@@ -175,6 +175,8 @@ SceneArrays = namedtuple(
         "light_scalars",  # float64 (nl, LS_SIZE)
         "ambient",  # float64 (3,)
         "background",  # float64 (3,)
+        "env_pixels",  # float32 (H, W, 3): the environment's lat-long radiance (1×1 black without one)
+        "env_info",  # float64 (ENV_INFO_SIZE,): present, rotation, size (compile.environment)
         "csg_nodes",  # int32 (nc, 4): see kernels.csg
         "tex_info",  # float64 (nx, TEX_SIZE): textures and bump maps, see kernels.texture
         "tex_pixels",  # float32 (npx, 3): every image texture's texels, row after row, one after another

@@ -23,6 +23,13 @@ def lighting_of(sa):
 
 
 @njit
+def sky_of(sa):
+    """What rays that leave the scene see (`environment.sky_radiance`): the environment's image and info, and the
+    background colour."""
+    return sa.env_pixels, sa.env_info, sa.background
+
+
+@njit
 def textures_of(sa):
     return Textures(sa.tex_info, sa.tex_pixels, sa.tri_tangents)
 

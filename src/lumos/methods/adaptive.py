@@ -10,7 +10,7 @@ import numpy as np
 
 from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.jit import njit, njit_inline, njit_serial
-from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
+from ..kernels.views import geometry_of, lighting_of, sky_of, surfaces_of, textures_of
 from .whitted_trace import point_radiance, store_aovs, trace, trace_scratch
 
 
@@ -35,7 +35,7 @@ def _corner_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed
         for x in range(width + 1):
             key = y * (width + 1) + x
             rgb, n = point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, np.float64(x),
-                            np.float64(y), seed, key, 0, max_depth, scratch, sa.background, cone)
+                            np.float64(y), seed, key, 0, max_depth, scratch, sky_of(sa), cone)
             corners[y, x, 0], corners[y, x, 1], corners[y, x, 2] = rgb
             for k in range(3, corners.shape[2]):  # the terms, when they are asked for
                 corners[y, x, k] = scratch[6][k - 3]
@@ -68,7 +68,7 @@ def _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, se
         rays = 0
         for x in range(width):
             count, nr = adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed,
-                                       max_depth, cone, threshold, max_level, corners, scratch, sa.background, grid,
+                                       max_depth, cone, threshold, max_level, corners, scratch, sky_of(sa), grid,
                                        stamp, stack, weights, value)
             rays += nr
             radiance[y, x, 0], radiance[y, x, 1], radiance[y, x, 2] = value[0], value[1], value[2]
@@ -80,7 +80,7 @@ def _adaptive_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, se
 
 @njit_inline
 def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth, cone,
-                   threshold, max_level, corners, scratch, background, grid, stamp, stack, weights, value):
+                   threshold, max_level, corners, scratch, sky, grid, stamp, stack, weights, value):
     """Pixel (x, y) by adaptive subdivision: value[:] = the area-weighted mean over its squares of their corners'
     values (every channel of `corners`: radiance, then the terms if present); returns (camera rays it took, rays
     traced beyond its corners).
@@ -147,7 +147,7 @@ def adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, h
                 continue
             stamp[py, px] = pixel
             rgb, nr = point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height,
-                             x + px * inv, y + py * inv, seed, key, py * n + px, max_depth, scratch, background,
+                             x + px * inv, y + py * inv, seed, key, py * n + px, max_depth, scratch, sky,
                              cone)
             grid[py, px, 0], grid[py, px, 1], grid[py, px, 2] = rgb
             for ch in range(3, channels):
@@ -181,7 +181,7 @@ def _aov_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, seed, c
         for x in range(width):
             o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, 0, 1, seed, y * width + x)
             rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, cam_time[0], np.int64(0), seed, y * width + x, 0,
-                                 scratch, sa.background)
+                                 scratch, sky_of(sa))
             rays += n
             store_aovs(x, y, info, depth, normal, albedo, object_id)
         rays_per_row[y] += rays

@@ -18,6 +18,7 @@ from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_serial
+from ..kernels.environment import sky_radiance
 from ..kernels.layout import MAT_ONE_SIDED, MAT_SHININESS
 from ..kernels.surface import shading_side, surface_at
 from ..kernels.bump import material_in_cone
@@ -87,13 +88,14 @@ def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, mi
                 o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
                 hit = closest_visible_hit(geo, surf, lit, o, d, 0.0, config.T_FAR, stack, stack_t, 0.0)
                 rays += 1
-                if hit[0] < 0.0:
-                    r += sa.background[0]
-                    g += sa.background[1]
-                    b += sa.background[2]
+                if hit[0] < 0.0:  # the background, or the environment in that direction
+                    bg = sky_radiance(sa.env_pixels, sa.env_info, sa.background, d)
+                    r += bg[0]
+                    g += bg[1]
+                    b += bg[2]
                     if want_terms:  # what a ray that misses sees counts as emitted (DESIGN.md: term AOVs)
                         for k in range(3):
-                            terms[y, x, 9 + k] += inv * sa.background[k]
+                            terms[y, x, 9 + k] += inv * bg[k]
                     continue
                 logged = x == explain[0] and y == explain[1] and s == 0
                 rgb, n_sh, kd, obj, extra, parts = shade_hit(surf, lit, tex, geo, o, d, cone, hit, seed, pixel, s,

@@ -34,7 +34,7 @@ from ..compile.camera import camera_arrays
 from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
 from ..errors import LumosError
-from ..kernels.views import geometry_of, lighting_of, owned_views, surfaces_of, textures_of
+from ..kernels.views import geometry_of, lighting_of, owned_views, sky_of, surfaces_of, textures_of
 from .adaptive import adaptive_pixel, adaptive_rows, aov_rows, corner_rows
 from .common import SURFACE_AOVS, TERM_CHANNELS, Film, finish, run_bands, start
 from .whitted_trace import LOG_DEPTH, LOG_FX, LOG_FY, point_radiance, shutter_time, store_aovs, trace, trace_scratch
@@ -62,7 +62,7 @@ def _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
         rays = 0
         for x in range(width):
             rgb, n = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
-                                  max_depth, cone, scratch, sa.background, depth, normal, albedo, object_id, tsum,
+                                  max_depth, cone, scratch, sky_of(sa), depth, normal, albedo, object_id, tsum,
                                   want_terms)
             rays += n
             radiance[y, x, 0], radiance[y, x, 1], radiance[y, x, 2] = rgb
@@ -75,7 +75,7 @@ def _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp,
 
 @njit_inline
 def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed, max_depth, cone,
-                 scratch, background, depth, normal, albedo, object_id, tsum, want_terms):
+                 scratch, sky, depth, normal, albedo, object_id, tsum, want_terms):
     """The mean of pixel (x, y)'s `spp` samples, and the rays traced; AOVs from its first sample; with
     `want_terms` the mean of its samples' terms in tsum (18). With logging on in `scratch`, every sample's rays
     go to its log, one tree after another (`lumos.explain`)."""
@@ -88,7 +88,7 @@ def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, hei
     for s in range(spp):
         o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
         time = shutter_time(cam_time, seed, pixel, s)
-        rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, pixel, s, scratch, background)
+        rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, pixel, s, scratch, sky)
         rays += n
         r += rgb[0]
         g += rgb[1]
@@ -115,6 +115,7 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
     from r · n_lights, rows used, weight of each row's camera ray in the pixel (rows,), 0 for the rays it
     spawned)."""
     geo, surf, lit, tex = owned_views(sa)
+    sky = (sa.env_pixels, sa.env_info, sa.background)  # (built here, with the runtime: see views.owned_views)
     scratch = trace_scratch(max_depth, log_rows, lit.light_kind.shape[0])
     log, log_n = scratch[7], scratch[8]
     weight = np.zeros(log_rows)
@@ -124,7 +125,7 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
         depth, normal, albedo = np.zeros((height, width)), np.zeros((height, width, 3)), np.zeros((height, width, 3))
         object_id = np.zeros((height, width), np.int32)
         rgb, _ = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
-                              max_depth, cone, scratch, sa.background, depth, normal, albedo, object_id,
+                              max_depth, cone, scratch, sky, depth, normal, albedo, object_id,
                               np.zeros(18), False)
         value[0], value[1], value[2] = rgb
         for row in range(log_n[0]):
@@ -139,7 +140,7 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
         for cx in range(x, x + 2):
             grid_row[(cy - y) * cells, (cx - x) * cells] = log_n[0]
             rgb, _ = point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, np.float64(cx),
-                            np.float64(cy), seed, cy * (width + 1) + cx, 0, max_depth, scratch, sa.background,
+                            np.float64(cy), seed, cy * (width + 1) + cx, 0, max_depth, scratch, sky,
                             cone)
             corners[cy, cx, 0], corners[cy, cx, 1], corners[cy, cx, 2] = rgb
     start = log_n[0]
@@ -148,7 +149,7 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
     stack = np.empty((4 * max_level + 4, 4), np.int64)
     weights = np.zeros((n, n))
     adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth, cone,
-                   threshold, max_level, corners, scratch, sa.background, grid, stamp, stack, weights, value)
+                   threshold, max_level, corners, scratch, sky, grid, stamp, stack, weights, value)
     for row in range(start, log_n[0]):
         if log[row, LOG_DEPTH] == 0.0:
             gx = np.int64(np.round((log[row, LOG_FX] - x) * cells))

@@ -11,6 +11,7 @@ import numpy as np
 from .. import config
 from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit
+from ..kernels.environment import sky_radiance
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline
 from ..kernels.layout import MAT_FRESNEL, MAT_IOR, MAT_KT, MAT_ONE_SIDED, MAT_SHININESS
@@ -100,7 +101,7 @@ def _add_term(tacc, k, w0, w1, w2, c):
 
 
 @njit_inline
-def trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, pixel, sample, scratch, background):
+def trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, pixel, sample, scratch, sky):
     """Radiance along the camera ray (o, d) at shutter time `time`. `cone` (width at o, spread angle;
     `kernels.camera.camera_cone`) is its ray cone, which the reflected and transmitted rays carry on (wider with
     distance, spread more by curved surfaces): the textures at each hit are filtered over its footprint.
@@ -136,12 +137,13 @@ def trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, pixel, sample,
         hit = closest_visible_hit(geo, surf, lit, ro, rd, 0.0, config.T_FAR, stack, stack_t, time)
         rays += 1
         t = hit[0]
-        if t < 0.0:  # a miss: the background
-            r, g, b = r + w0 * background[0], g + w1 * background[1], b + w2 * background[2]
+        if t < 0.0:  # a miss: the background, or the environment in that direction
+            bg = sky_radiance(sky[0], sky[1], sky[2], rd)
+            r, g, b = r + w0 * bg[0], g + w1 * bg[1], b + w2 * bg[2]
             if keep_terms:
-                _add_term(tacc, T_EMITTED if depth == 0 else k_light, w0, w1, w2, background)
+                _add_term(tacc, T_EMITTED if depth == 0 else k_light, w0, w1, w2, bg)
             if row >= 0:
-                _log3(log, row, LOG_BACKGROUND, background)
+                _log3(log, row, LOG_BACKGROUND, bg)
             continue
         width = st_f[top, 9] + st_f[top, 10] * t  # the cone's (signed) width here
         p, n_geo, n_s, n_g, obj, mat, entering, kr, kt, light_rgb, terms, extra = _shade(
@@ -375,15 +377,15 @@ def store_aovs(x, y, info, depth, normal, albedo, object_id):
 
 @njit_inline
 def point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, fx, fy, seed, key, sample, max_depth,
-           scratch, background, cone):
+           scratch, sky, cone):
     """The radiance through image point (fx, fy); `key` and `sample` index its random numbers (lens, time); `cone`
-    the camera ray's cone (`trace`)."""
+    the camera ray's cone, `sky` what rays that leave the scene see (`views.sky_of`; `trace`)."""
     lx, ly = rand01(seed, key, sample, 2), rand01(seed, key, sample, 3)
     o, d = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
     time = shutter_time(cam_time, seed, key, sample)
     log, log_n = scratch[7], scratch[8]
     first = log_n[0]
-    rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, key, sample, scratch, background)
+    rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, key, sample, scratch, sky)
     if 0 <= first < log.shape[0]:  # where the camera ray went through the image (lumos.explain)
         log[first, LOG_FX] = fx
         log[first, LOG_FY] = fy
