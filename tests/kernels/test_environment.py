@@ -173,3 +173,17 @@ def test_the_ray_methods_see_the_environment_where_rays_leave(tmp_path, method):
         scene["objects"] = [{"type": "sphere", "center": [3, 0, 0], "radius": 1, "material": {"kr": 1.0}}]
         mirrored = lumos.render(scene).array[1, 1]
         np.testing.assert_allclose(mirrored, [5 / 16, 0.5, 0.0], rtol=1e-6)  # −x: u = 1/4, column 4
+
+
+@pytest.mark.parametrize("method", ["raycast", "whitted", "raster"])
+def test_the_environment_is_the_classic_ambient_light_unless_one_is_given(method):
+    """Without an `ambient`, the classic methods' Ia is the environment's mean radiance: a sphere of ka 0.5 and
+    nothing else under a sky of 0.4 shows 0.2 (a white matte surface under a uniform sky L reflects L); a
+    scene's own ambient wins."""
+    scene = {"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 20},
+             "render": {"width": 9, "height": 9, "method": method},
+             "environment": {"color": 0.4},
+             "objects": [{"type": "sphere", "material": {"ka": 0.5}}]}
+    np.testing.assert_allclose(lumos.render(scene).array[4, 4], 0.2, rtol=1e-5)
+    scene["ambient"] = 0.1
+    np.testing.assert_allclose(lumos.render(scene).array[4, 4], 0.05, rtol=1e-5)

@@ -259,6 +259,17 @@ def compile_scene(scene) -> CompiledScene:
     return _assemble(scene, materials, shapes, tri_parts, lights, names)
 
 
+def _ambient(scene) -> np.ndarray:
+    """Ia: the scene's `ambient`, or, where it gives none and has an environment, the environment's mean radiance
+    (a white diffuse surface under a uniform sky L reflects L: the classic Ka·Ia made physical)."""
+    env = getattr(scene, "environment", None)
+    if env is None or "ambient" in getattr(scene, "model_fields_set", ()):
+        return np.array(scene.ambient, dtype=np.float64)
+    from .environment import environment_image, mean_radiance
+
+    return mean_radiance(environment_image(env))
+
+
 def _background(scene) -> np.ndarray:
     """What rays that miss see in the methods that do not look the environment up: the background colour, or the
     environment's mean radiance."""
@@ -384,7 +395,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         light_samples=light_samples,
         light_vecs=light_vecs,
         light_scalars=light_scalars,
-        ambient=np.array(scene.ambient, dtype=np.float64),
+        ambient=_ambient(scene),
         background=_background(scene),
         env_pixels=env[0],
         env_info=env[3],
