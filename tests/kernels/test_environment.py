@@ -11,33 +11,15 @@ from helpers import interior_of
 
 import lumos
 from lumos.compile.emitters import build_emitters
-from lumos.compile.environment import environment_arrays, mean_radiance
+from lumos.compile import compile_scene
+from lumos.compile.environment import image_arrays, mean_radiance
 from lumos.kernels.environment import env_pdf, env_radiance, env_sample
-from lumos.scene.lights import Environment
 
 
 def table(image, rotation=0.0):
-    """An emitter table holding only the environment `image` (H, W, 3)."""
-    env2 = Environment(color=(1.0, 1.0, 1.0), rotation=rotation)
-    scene = lumos.load_scene({"objects": [{"type": "sphere"}]})
-    from lumos.compile import compile_scene
-
-    compiled = compile_scene(scene)
-    em = build_emitters(compiled.arrays, compiled.bounds, env2)
-    pixels, marginal, conditional, info2 = _arrays_of(image, rotation)
-    return em._replace(env_pixels=pixels, env_marginal=marginal, env_conditional=conditional,
-                       env_info=np.concatenate([info2[:5], [em.env_info[5]]]))
-
-
-def _arrays_of(image, rotation):
-    import lumos.compile.environment as E
-
-    original = E.environment_image
-    E.environment_image = lambda env: np.asarray(image, np.float32)
-    try:
-        return environment_arrays(Environment(color=(1.0, 1.0, 1.0), rotation=rotation))
-    finally:
-        E.environment_image = original
+    """An emitter table holding a sphere's scene and the environment `image` (H, W, 3)."""
+    compiled = compile_scene(lumos.load_scene({"objects": [{"type": "sphere"}]}))
+    return build_emitters(compiled.arrays, compiled.bounds, image_arrays(image, rotation))
 
 
 @numba.njit(cache=True)

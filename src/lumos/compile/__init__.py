@@ -38,6 +38,8 @@ class CompiledScene:
     object_names: list = field(default_factory=list)
     raster: Optional["RasterMesh"] = None  # the polygons, for method raster
     emitters: Optional[L.Emitters] = None  # the lights and emissive primitives, for method path
+    #: the environment's (pixels, marginal CDF, conditional CDFs, info) (`compile.environment`), or None
+    environment: Optional[tuple] = None
     patches: Optional[object] = None  # compile.patches.Patches, for method radiosity (`compile.patches.attach`)
     digest: str = ""  # radiosity: the fingerprint of the geometry and materials a solution depends on
     material_names: list = field(default_factory=list)  # a name for each material row (messages, explain)
@@ -259,26 +261,19 @@ def compile_scene(scene) -> CompiledScene:
     return _assemble(scene, materials, shapes, tri_parts, lights, names)
 
 
-def _ambient(scene) -> np.ndarray:
-    """Ia: the scene's `ambient`, or, where it gives none and has an environment, the environment's mean radiance
-    (a white diffuse surface under a uniform sky L reflects L: the classic Ka·Ia made physical)."""
-    env = getattr(scene, "environment", None)
-    if env is None or "ambient" in getattr(scene, "model_fields_set", ()):
-        return np.array(scene.ambient, dtype=np.float64)
-    from .environment import environment_image, mean_radiance
+def _ambient_and_background(scene, env_pixels: Optional[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Ia and what rays that miss see where the environment is not looked up: the scene's `ambient` and
+    `background`, or, with an environment (its `env_pixels`), its mean radiance for both (for Ia only where the
+    scene gives no `ambient`: a white diffuse surface under a uniform sky L reflects L, the classic Ka·Ia made
+    physical)."""
+    ambient = np.array(scene.ambient, dtype=np.float64)
+    background = np.array(scene.background, dtype=np.float64)
+    if env_pixels is None:
+        return ambient, background
+    from .environment import mean_radiance
 
-    return mean_radiance(environment_image(env))
-
-
-def _background(scene) -> np.ndarray:
-    """What rays that miss see in the methods that do not look the environment up: the background colour, or the
-    environment's mean radiance."""
-    env = getattr(scene, "environment", None)
-    if env is None:
-        return np.array(scene.background, dtype=np.float64)
-    from .environment import environment_image, mean_radiance
-
-    return mean_radiance(environment_image(env))
+    mean = mean_radiance(env_pixels)
+    return (ambient if "ambient" in getattr(scene, "model_fields_set", ()) else mean), mean
 
 
 def _material_names(scene, materials: _Materials) -> list[str]:
@@ -362,7 +357,9 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
     tex_info, tex_pixels = build_textures(materials)  # also fills the rows' MAT_TEXTURE / MAT_BUMP
     from .environment import environment_arrays
 
-    env = environment_arrays(getattr(scene, "environment", None))  # what the ray methods' misses look up
+    environment = getattr(scene, "environment", None)
+    env = environment_arrays(environment)  # read once: the ray methods' misses and path's light sampling use it
+    ambient, background = _ambient_and_background(scene, env[0] if environment is not None else None)
     material_rows = materials.array()
     if n_shape:
         shape_mats = material_rows[shape_info[:, L.INFO_MATERIAL]]
@@ -395,8 +392,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         light_samples=light_samples,
         light_vecs=light_vecs,
         light_scalars=light_scalars,
-        ambient=_ambient(scene),
-        background=_background(scene),
+        ambient=ambient,
+        background=background,
         env_pixels=env[0],
         env_info=env[3],
         csg_nodes=np.asarray(getattr(shapes, "csg_nodes", np.zeros((0, 4), np.int32)), np.int32).reshape(-1, 4),
@@ -410,7 +407,7 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         bounds = np.zeros((2, 3))
     return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names,
                          material_names=_material_names(scene, materials), triangle_order=tri_order,
-                         triangle_faces=tri_face)
+                         triangle_faces=tri_face, environment=env if environment is not None else None)
 
 
 def _leaf_ordered(rows: np.ndarray, order: np.ndarray, tail: np.ndarray) -> np.ndarray:

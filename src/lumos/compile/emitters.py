@@ -23,6 +23,7 @@ image in expectation, these only make the noise smaller where lights of differen
 from __future__ import annotations
 
 import warnings
+from typing import Optional
 
 import numpy as np
 
@@ -121,9 +122,10 @@ def _uniform_scale(m: np.ndarray) -> bool:
     return bool(np.allclose(g, s * np.eye(3), rtol=1e-9, atol=1e-12 * max(s, 1e-300)))
 
 
-def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray, environment=None) -> L.Emitters:
-    """The emitter table of a compiled scene (see the module doc), with the scene's `environment` (a scene-model
-    Environment, or None) as one more entry."""
+def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray, environment: Optional[tuple] = None) -> L.Emitters:
+    """The emitter table of a compiled scene (see the module doc), with the scene's environment (its
+    `compile.environment.environment_arrays`, as `CompiledScene.environment` holds them; None: none) as one more
+    entry."""
     from .environment import environment_arrays, environment_power
 
     mats = arrays.materials
@@ -204,7 +206,8 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray, environment=None) 
         shape_emit[s] = len(kinds)
         add(L.EMIT_SHAPE, int(s), np.pi * _mean(le) * area, area, part_areas / area, geom)
 
-    env_pixels, env_marginal, env_conditional, env_info = environment_arrays(environment)
+    env_pixels, env_marginal, env_conditional, env_info = environment or environment_arrays(None)
+    env_info = env_info.copy()  # (its entry is the table's; the scene arrays' copy is not written)
     if environment is not None:
         env_power = environment_power(env_pixels, radius)
         if env_power > 0.0:
@@ -240,16 +243,17 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray, environment=None) 
     )
 
 
-def attach(compiled, environment=None) -> None:
+def attach(compiled) -> None:
     """Ready a compiled scene (`compile_scene`) for the path tracer: its material rows read physically
-    (`physical_materials`) and its emitter table (`CompiledScene.emitters`), the scene's `environment` in it."""
+    (`physical_materials`) and its emitter table (`CompiledScene.emitters`), the scene's environment in it."""
     rows = physical_materials(compiled.material_names, compiled.arrays.materials)
     compiled.arrays = compiled.arrays._replace(materials=rows)
     # emitters whose emission is textured are left to the BSDF rays (light sampling would need the texture at the
     # sampled point): the table is built as if they did not emit
     untextured = rows.copy()
     untextured[_textured_emission(rows, compiled.arrays.tex_info), L.MAT_EMISSION:L.MAT_EMISSION + 3] = 0.0
-    compiled.emitters = build_emitters(compiled.arrays._replace(materials=untextured), compiled.bounds, environment)
+    compiled.emitters = build_emitters(compiled.arrays._replace(materials=untextured), compiled.bounds,
+                                       compiled.environment)
 
 
 def _textured_emission(rows: np.ndarray, tex_info: np.ndarray) -> np.ndarray:

@@ -2,8 +2,11 @@
 distribution the path tracer samples directions from.
 
     image = environment_image(env)                  # float32 (H, W, 3) radiance, scale applied (1×1 for a colour)
-    pixels, marginal, conditional, info = environment_arrays(env)
-    mean = mean_radiance(image)                     # what the methods without the environment see as background
+    pixels, marginal, conditional, info = environment_arrays(env)   # = image_arrays(image, env.rotation)
+    mean = mean_radiance(image)                     # Ia, and the background of the methods that do not look it up
+
+`compile_scene` reads and tabulates it once (`CompiledScene.environment`); the scene arrays and path's emitter
+table share the result.
 
 Pixel (i, j) covers v in [i/H, (i+1)/H) (θ = v·π from +y) and u in [j/W, (j+1)/W); it is drawn with probability
 proportional to its mean radiance times sin θ at its centre (the solid angle it covers), then a point uniform in
@@ -11,6 +14,8 @@ it; the density per solid angle is p(i, j)·H·W / (2π²·sin θ) (Pharr, Jakob
 """
 
 from __future__ import annotations
+
+from typing import Optional
 
 import numpy as np
 
@@ -48,16 +53,24 @@ def mean_radiance(image: np.ndarray) -> np.ndarray:
 
 
 def environment_arrays(env) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The arrays of a scene-model Environment (`image_arrays` of its image and rotation); an empty 1×1 black
+    environment when `env` is None."""
+    if env is None:
+        return image_arrays(np.zeros((1, 1, 3), np.float32), None)
+    return image_arrays(environment_image(env), env.rotation)
+
+
+def image_arrays(pixels: np.ndarray, rotation: Optional[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                          np.ndarray]:
     """(pixels float32 (H, W, 3), marginal CDF float64 (H + 1,) over rows, conditional CDFs float64 (H, W + 1)
-    within each row, info float64 (ENV_INFO_SIZE,)); an empty 1×1 black environment when `env` is None."""
+    within each row, info float64 (ENV_INFO_SIZE,)) of a lat-long radiance image turned `rotation` degrees about
+    +y (None: absent, the 1×1 black stand-in)."""
+    pixels = np.ascontiguousarray(pixels, np.float32)
     info = np.zeros(ENV_INFO_SIZE)
     info[ENV_ENTRY] = -1.0
-    if env is None:
-        pixels = np.zeros((1, 1, 3), np.float32)
-    else:
-        pixels = environment_image(env)
+    if rotation is not None:
         info[ENV_PRESENT] = 1.0
-        a = np.radians(env.rotation)
+        a = np.radians(rotation)
         info[ENV_COS], info[ENV_SIN] = np.cos(a), np.sin(a)
     h, w = pixels.shape[:2]
     info[ENV_WIDTH], info[ENV_HEIGHT] = w, h

@@ -18,7 +18,7 @@ def compile_for(scene, settings, solved: bool = False):
     if settings.method == "path":
         from ..compile import emitters
 
-        emitters.attach(compiled, scene.environment)
+        emitters.attach(compiled)
     elif settings.method == "radiosity":
         from ..compile import patches
 
