@@ -40,14 +40,14 @@ def child(args) -> None:
     import warnings
 
     import lumos
-    from lumos.methods import path as path_method
+    from lumos.methods import path_trace
 
     warnings.simplefilter("ignore")  # NUMBA_DEBUGINFO's warnings about generated functions without source
 
     scene = lumos.load_scene(args.scene)
     settings = dict(method="path", threads=args.threads)
     lumos.render(scene, spp=1, seed=0, **settings)
-    overload = path_method._pass_rows.overloads[path_method._pass_rows.signatures[0]]
+    overload = path_trace.pass_rows.overloads[path_trace.pass_rows.signatures[0]]
     library = overload.library
     out = Path(args.out)
     if not (out / "kernel.o").exists():

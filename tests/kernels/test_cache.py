@@ -79,18 +79,18 @@ def run_child(root: Path, cache_dir: Path, kinds: str = "int") -> dict:
 
 
 def test_the_closure_of_a_kernel_holds_what_it_inlines_and_nothing_else():
-    from lumos.methods import path, raycast
+    from lumos.methods import path_trace, raycast
 
     def rel(kernel):
         return {str(Path(p).relative_to(PACKAGE)) for p in cache.source_closure(kernel.py_func)}
 
-    ray, pt = rel(raycast._raycast_rows), rel(path._pass_rows)
+    ray, pt = rel(raycast._raycast_rows), rel(path_trace.pass_rows)
     for closure in (ray, pt):
         assert {"kernels/traverse.py", "kernels/layout.py", "kernels/intersect.py", "config.py",
                 "kernels/jit.py"} <= closure
         assert "kernels/raster.py" not in closure and "scene/model.py" not in closure
-    assert "methods/raycast.py" in ray and "methods/path.py" not in ray
-    assert {"methods/path.py", "kernels/sobol.py", "kernels/bsdf.py"} <= pt and "methods/raycast.py" not in pt
+    assert "methods/raycast.py" in ray and "methods/path_trace.py" not in ray
+    assert {"methods/path_trace.py", "kernels/sobol.py", "kernels/bsdf.py"} <= pt and "methods/raycast.py" not in pt
 
 
 @pytest.mark.slow
