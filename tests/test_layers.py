@@ -23,8 +23,8 @@ LAYERS = (
     ("the scene model and the files scenes, models and images come from", ("scene", "io")),
     ("compile: a scene to flat arrays, BVH, polygons, patches", ("compile",)),
     ("the rendering methods and radiosity's solver", ("methods", "radiosity", "denoise")),
-    ("the API: render and its Image, ray queries, progress, compile-time messages",
-     ("api", "image", "queries", "jitwatch", "progress")),
+    ("the API: render and its Image, animations, the cluster, ray queries, progress, compile-time messages",
+     ("api", "image", "queries", "jitwatch", "progress", "animate", "cluster")),
     ("tools on top of the API and the command line",
      ("tools", "cli", "__main__", "__init__")),
 )

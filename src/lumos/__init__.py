@@ -14,7 +14,7 @@ from .scene import Scene, load_scene
 
 __version__ = "0.1.0"
 __all__ = ["Image", "LumosError", "LumosWarning", "RayCaster", "Scene", "__version__", "explain", "load_scene",
-           "render"]
+           "render", "render_frames"]
 
 
 def __getattr__(name: str):
@@ -26,6 +26,10 @@ def __getattr__(name: str):
         from .queries import RayCaster
 
         return RayCaster
+    if name == "render_frames":  # the frames of an animation (lumos.animate)
+        from .animate import render_frames
+
+        return render_frames
     if name == "explain":
         from .tools.explain import explain
 

@@ -89,7 +89,8 @@ def resolve_settings(scene: Scene, overrides: dict[str, Any]) -> RenderSettings:
     return settings
 
 
-def _entry_point(name: str) -> Callable:
+def entry_point(name: str) -> Callable:
+    """The render function of method `name` (`METHODS`)."""
     import importlib
 
     module, func = METHODS[name].split(":")
@@ -97,7 +98,8 @@ def _entry_point(name: str) -> Callable:
 
 
 def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] = False,
-           on_pass: Optional[Callable[["Image"], None]] = None, solution=None, **settings) -> "Image":
+           on_pass: Optional[Callable[["Image"], None]] = None, solution=None, client=None,
+           checkpoint: Optional[str] = None, resume: bool = False, **settings) -> "Image":
     """Render `scene` (a Scene, a dict or a path) and return an `Image`.
 
     `settings` override the scene's `render:` block: method, width, height, spp, max_depth, seed, shading,
@@ -106,6 +108,10 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
     compiled, on a first run); a callable receives the finished fraction instead. `on_pass(image)` (method path)
     receives the image after each pass of samples, e.g. to write checkpoints. `solution` (method radiosity): a
     `lumos.radiosity.Solution` or the path of a saved one, drawn without solving again.
+
+    `client` (a `distributed.Client`): render on its Dask workers, the same image to the bit (`lumos.cluster`).
+    `checkpoint` (a folder): keep every finished piece (path: blocks of samples; raycast, whitted: bands of rows)
+    there, and with `resume=True` go on from the pieces a stopped run left.
 
     `stats` holds the timings: load_s, build_s (flatten + BVH), render_s and total_s, and jit_s, the time
     Numba spent compiling kernels (a first run only), which build_s and render_s exclude.
@@ -118,6 +124,10 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
 
     t0 = time.perf_counter()
     scene = load_scene(scene)  # a Scene built in Python is completed (mesh files, includes), a file or dict loaded
+    if scene.animation is not None:  # an animated scene renders its frame 0 (`render_frames` renders the others)
+        from .scene.animation import scene_at
+
+        scene = scene_at(scene, 0.0)
     t_load = time.perf_counter()
     cfg = resolve_settings(scene, settings)
     if cfg.denoise:
@@ -148,7 +158,16 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
             kwargs["on_pass"] = lambda film: on_pass(Image(film.radiance, aovs=film.aovs, exposure=cfg.exposure,
                                                            stats=dict(film.extra)))
         with make_progress(progress) as report:
-            film = _entry_point(cfg.method)(compiled, scene.camera, cfg, progress=report, **kwargs)
+            if client is not None or checkpoint is not None:
+                if kwargs:
+                    raise LumosError("render: on_pass and solution are for renders in this process, without a "
+                                     "cluster or a checkpoint folder")
+                from .cluster import render_pieces
+
+                film = render_pieces(client, entry_point(cfg.method), compiled, scene.camera, cfg, progress=report,
+                                     checkpoint=checkpoint, resume=resume)
+            else:
+                film = entry_point(cfg.method)(compiled, scene.camera, cfg, progress=report, **kwargs)
         t_render = time.perf_counter()
     render_s = max(t_render - t_build - (watch.seconds - jit_build), 0.0)
     stats = {

@@ -164,8 +164,19 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("-o", "--output", metavar="OUT", help="image to write: .png, .exr, .pfm or .npy "
                         "(default: <scene name>.png in the current folder)")
     _render_flags(render)
+    render.add_argument("--frames", metavar="A:B[:STEP]|K", help="render these frames of the scene's animation "
+                        "(A:B half-open, A:B:STEP, or one frame K); OUT is then a pattern such as "
+                        "frames/f_%%04d.png, or a .mp4 or .gif video (which alone renders every frame). Without "
+                        "--frames an animated scene renders frame 0")
     render.add_argument("--stats", metavar="FILE.json", help="write timings and ray counts as JSON")
     render.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
+    farm = render.add_argument_group("a cluster, and resuming a stopped render (docs/cluster.md)")
+    farm.add_argument("--cluster", metavar="SPEC", help="render on Dask workers: local or local:N (N worker "
+                      "processes here), or a scheduler's address (tcp://HOST:8786, tls://… with Dask's TLS "
+                      "settings); the image is the same to the bit as a render here")
+    farm.add_argument("--checkpoint", metavar="DIR", help="keep every finished piece of the render (path: bands "
+                      "of rows of each block of samples; raycast, whitted: bands of rows; --frames: frames) in DIR")
+    farm.add_argument("--resume", action="store_true", help="with --checkpoint: go on from the pieces in DIR")
     model = render.add_argument_group("a model file as SCENE")
     model.add_argument("--view", metavar="V", help="three-quarter (default: from the front, swung and raised), "
                        "front, back, left, right or top")
@@ -337,12 +348,18 @@ def run_render(args: argparse.Namespace, started: float) -> int:
     from .io.image_files import check_output_path
     from .scene.loader import load_scene
 
+    if args.frames is not None or _is_video(args.output):
+        return run_render_frames(args, started)
     out = Path(args.output) if args.output else Path(Path(args.scene).stem + ".png")
     check_output_path(out)
     if args.stats:
         _check_stats_path(Path(args.stats))
     t0 = time.perf_counter()
     scene = load_scene(args.scene, view=args.view, up=args.up)
+    if scene.animation is not None:  # an animated scene without --frames: frame 0
+        from .scene.animation import scene_at
+
+        scene = scene_at(scene, 0.0)
     load_s = time.perf_counter() - t0
     overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
     overrides.update(_radiosity_overrides(args))
@@ -363,7 +380,27 @@ def run_render(args: argparse.Namespace, started: float) -> int:
         if not args.checkpoint_every > 0:
             raise LumosError(f"--checkpoint-every: expected a positive number of seconds, got {args.checkpoint_every}")
         on_pass = _checkpointer(out, args.checkpoint_every)
-    img = api.render(scene, progress=not args.quiet, on_pass=on_pass, solution=args.solution, **overrides)
+    if args.resume and args.checkpoint is None:
+        raise LumosError("--resume goes on from a --checkpoint folder: give it with --checkpoint DIR")
+    if (args.cluster or args.checkpoint) and (on_pass is not None or args.solution is not None
+                                              or cfg.time_limit is not None):
+        flag = ("--checkpoint-every" if on_pass is not None else "--solution" if args.solution is not None
+                else "--time-limit")
+        raise LumosError(f"{flag} is for a render in this process, not with --cluster or --checkpoint")
+    farm = {"checkpoint": args.checkpoint, "resume": args.resume}
+    if args.cluster:
+        from .cluster import connect
+
+        client, close = connect(args.cluster)
+        try:
+            if not args.quiet and client.dashboard_link:
+                print(f"lumos: Dask dashboard at {client.dashboard_link}", file=sys.stderr)
+            img = api.render(scene, progress=not args.quiet, client=client, **farm, **overrides)
+        finally:
+            close()
+    else:
+        img = api.render(scene, progress=not args.quiet, on_pass=on_pass, solution=args.solution, **farm,
+                         **overrides)
     img.save(out)
     stats = dict(img.stats, load_s=load_s, total_s=time.perf_counter() - started)
     if args.stats:
@@ -373,6 +410,143 @@ def run_render(args: argparse.Namespace, started: float) -> int:
             print(f"lumos: radiosity {_radiosity_summary(dict(stats['radiosity'], total_s=stats['render_s']))}",
                   file=sys.stderr)
         print(f"lumos: {_summary(stats)} -> {out}", file=sys.stderr)
+        if args.cluster or args.checkpoint:
+            from .cluster import describe
+
+            print(f"lumos: {describe(stats)}", file=sys.stderr)
+    return 0
+
+
+def _is_video(output: Optional[str]) -> bool:
+    from .io.video import is_video
+
+    return is_video(output)
+
+
+def _frame_name(pattern: str, frame: int) -> str:
+    """`frames/f_%04d.png` and 7 -> `frames/f_0007.png`; a name without a % is the name (one frame)."""
+    return pattern % frame if "%" in pattern else pattern
+
+
+def parse_frames(spec: str):
+    """`--frames`: 'A:B' and 'A:B:STEP' (half-open; A or B may be left out) -> slice, 'K' -> int."""
+    parts = spec.split(":")
+    try:
+        if len(parts) == 1:
+            return int(parts[0])
+        if len(parts) in (2, 3):
+            return slice(*(int(p) if p.strip() else None for p in parts))
+    except ValueError:
+        pass
+    raise LumosError(f"--frames: expected A:B, A:B:STEP or one frame K (integers), got {spec!r}")
+
+
+def run_render_frames(args: argparse.Namespace, started: float) -> int:
+    """`lumos render SCENE --frames A:B -o frames/f_%04d.png` (or `-o video.mp4`): the frames of the scene's
+    animation, each written as it is rendered, or encoded into one video written whole at the end."""
+    from . import api
+    from .animate import frame_indices
+    from .io.image_files import SUPPORTED, check_output_path
+    from .io.video import check_video_path
+    from .scene.loader import load_scene
+
+    video = _is_video(args.output)
+    pattern = args.output or f"{Path(args.scene).stem}_%04d.png"
+    if video:
+        check_video_path(pattern)
+    if args.stats:
+        _check_stats_path(Path(args.stats))
+    if args.checkpoint_every is not None:
+        raise LumosError("--checkpoint-every rewrites one image as it renders; with --frames each frame is written "
+                         "when it is done")
+    if video and args.aov:
+        raise LumosError("--aov writes image files beside the image; a video holds the image only (write frames: "
+                         "-o frames/f_%04d.png)")
+    if args.resume and args.checkpoint is None:
+        raise LumosError("--resume goes on from a --checkpoint folder: give it with --checkpoint DIR")
+    t0 = time.perf_counter()
+    scene = load_scene(args.scene, view=args.view, up=args.up)
+    load_s = time.perf_counter() - t0
+    selection = parse_frames(args.frames) if args.frames is not None else None
+    frames = frame_indices(scene, selection)
+    if not video:
+        names = []
+        for k in (frames[0], frames[-1]):
+            try:
+                names.append(_frame_name(pattern, k))
+            except (TypeError, ValueError):
+                raise LumosError(f"-o {pattern}: a pattern for frames takes one %d-style number, such as "
+                                 f"frames/f_%04d.png") from None
+        if len(frames) > 1 and names[0] == names[1]:
+            raise LumosError(f"-o {pattern}: {len(frames)} frames need a file name each: put the frame number in "
+                             f"it, e.g. {Path(pattern).with_name(Path(pattern).stem + '_%04d' + Path(pattern).suffix)}")
+        if Path(names[0]).suffix.lower() not in SUPPORTED:
+            check_output_path(names[0])  # says which extensions there are
+    overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
+    overrides.update(_radiosity_overrides(args))
+    cfg = api.resolve_settings(scene, overrides)  # bad flags fail here, before anything is compiled
+    if args.solution is not None and cfg.method != "radiosity":
+        raise LumosError(f"--solution is a radiosity solution; method {cfg.method} does not draw one")
+    if args.mipmap is not None and cfg.method not in ("raster", "raycast", "whitted"):
+        raise LumosError(f"--no-mipmap is a setting of raster, raycast and whitted; method {cfg.method} does not "
+                         f"filter textures")
+    radiosity_given = _radiosity_overrides(args)
+    if radiosity_given and cfg.method != "radiosity":
+        flag = "--" + next(iter(radiosity_given["radiosity"])).replace("_", "-")
+        raise LumosError(f"{flag} is a radiosity setting; method {cfg.method} does not take it")
+    client, close = None, (lambda: None)
+    if args.cluster:
+        from .cluster import connect
+
+        client, close = connect(args.cluster)
+        if not args.quiet and client.dashboard_link:
+            print(f"lumos: Dask dashboard at {client.dashboard_link}", file=sys.stderr)
+    try:
+        return _write_frames(args, started, scene, load_s, frames, selection, pattern, video, overrides, client)
+    finally:
+        close()
+
+
+def _write_frames(args, started, scene, load_s, frames, selection, pattern, video, overrides, client) -> int:
+    """The frames of `run_render_frames` rendered (here or on the cluster's workers) and written."""
+    from .animate import frames_of, render_frames
+    from .io.image_files import check_output_path
+    from .io.video import write_video
+
+    # every frame's scene is made and checked here, before anything is written
+    images = render_frames(scene, frames, progress=not args.quiet, solution=args.solution, client=client,
+                           checkpoint=args.checkpoint, resume=args.resume, **overrides)
+    if not video:
+        for k in frames:
+            Path(_frame_name(pattern, k)).parent.mkdir(parents=True, exist_ok=True)  # frames/ for frames/f_%04d.png
+        check_output_path(_frame_name(pattern, frames[0]))
+    per_frame = []
+
+    def kept(source):
+        for image in source:
+            per_frame.append(dict(image.stats))
+            yield image
+
+    if video:  # every STEPth frame plays at fps/STEP: the video keeps the animation's speed
+        step = selection.step if isinstance(selection, slice) and selection.step else 1
+        write_video(pattern, frames_of(kept(images)), fps=(scene.animation.fps if scene.animation else 24.0) / step)
+    else:
+        for image in kept(images):
+            image.save(_frame_name(pattern, image.stats["frame"]))
+    total_s = time.perf_counter() - started
+    stats = {"frames": len(per_frame), "load_s": load_s, "total_s": total_s,
+             "render_s": sum(s.get("render_s", 0.0) for s in per_frame),
+             "rays": sum(int(s.get("rays", 0)) for s in per_frame),
+             "radiosity_solves": sum(s.get("radiosity_solves", 0) for s in per_frame), "per_frame": per_frame}
+    if args.stats:
+        _write_json(Path(args.stats), stats)
+    if not args.quiet:
+        last = per_frame[-1]
+        solves = (f", radiosity solved {stats['radiosity_solves']} time{'s' if stats['radiosity_solves'] != 1 else ''}"
+                  if last.get("method") == "radiosity" else "")
+        print(f"lumos: {len(per_frame)} frame{'s' if len(per_frame) != 1 else ''} ({last.get('method')} "
+              f"{last.get('width')}x{last.get('height')}, {last.get('spp')} spp), {total_s:.2f} s (render "
+              f"{stats['render_s']:.2f} s){solves} -> {pattern}", file=sys.stderr)
     return 0
 
 

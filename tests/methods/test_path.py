@@ -187,6 +187,24 @@ def test_same_image_for_any_thread_count_and_pass_split(monkeypatch):
     assert not np.array_equal(one.array, other_seed.array)
 
 
+def test_blocks_of_samples_are_added_in_block_order_whatever_the_passes(monkeypatch):
+    """Samples are summed in blocks (SAMPLE_BLOCK) from zero, the blocks added in order: passes that cut through
+    blocks, or one sample each, give the same bits; the blocks change only the rounding of the sums."""
+    from lumos.methods import path as path_method
+
+    settings = dict(width=12, height=8, spp=11, seed=3, aov=["variance", "albedo", "depth"])
+    plain = path(SMALL_BOX, **settings)  # one block of 1024
+    monkeypatch.setattr(path_method, "SAMPLE_BLOCK", 4)
+    blocks = path(SMALL_BOX, **settings)
+    monkeypatch.setattr(path_method, "PASS_SECONDS", 1e-9)
+    split = path(SMALL_BOX, **settings)
+    assert split.stats["passes"] == 11
+    for name in settings["aov"]:
+        np.testing.assert_array_equal(blocks.aovs[name], split.aovs[name])
+    np.testing.assert_array_equal(blocks.array, split.array)
+    np.testing.assert_allclose(blocks.array, plain.array, rtol=1e-6, atol=1e-7)
+
+
 def test_image_is_the_same_whatever_aovs_are_asked_for():
     """The kernel stores squares, guides and the direct light only for the AOVs that read them: the image and the
     AOVs asked for are those of a render that keeps everything."""

@@ -52,10 +52,12 @@ def set_threads(threads: int | None) -> int:
     return n
 
 
-def row_bands(height: int, bands: int = 48):
-    """(y0, y1) ranges covering the image, so a kernel can be run band by band between progress reports."""
-    step = max(1, -(-height // bands))
-    return [(y0, min(height, y0 + step)) for y0 in range(0, height, step)]
+def row_bands(height: int, bands: int = 48, rows: tuple[int, int] | None = None):
+    """(y0, y1) ranges covering the image (or only its rows [rows[0], rows[1]): a tile of a cluster render), so a
+    kernel can be run band by band between progress reports."""
+    lo, hi = (0, height) if rows is None else rows
+    step = max(1, -(-(hi - lo) // bands))
+    return [(y0, min(hi, y0 + step)) for y0 in range(lo, hi, step)]
 
 
 def available_memory() -> int | None:
@@ -130,10 +132,14 @@ def start(settings, bytes_per_pixel: int = 64, aovs_if_asked: bool = False) -> t
 def run_bands(rows, height: int, progress=None, bands=None) -> None:
     """rows(y0, y1) over the image in bands of rows (`row_bands`, or the (y0, y1) list given), each band's rows
     on the threads (`threads.parallel_for`), calling progress(fraction done) after each band."""
-    for y0, y1 in row_bands(height) if bands is None else bands:
+    bands = row_bands(height) if bands is None else bands
+    total = sum(y1 - y0 for y0, y1 in bands)
+    done = 0
+    for y0, y1 in bands:
         parallel_for(rows, y0, y1)
+        done += y1 - y0
         if progress is not None:
-            progress(y1 / height)
+            progress(done / max(total, 1))
 
 
 def finish(settings, buffers: Buffers, threads: int, samples, rays: int, primary_rays: int = 0) -> Film:

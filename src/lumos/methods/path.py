@@ -38,9 +38,12 @@ from .path_trace import (
     pass_rows,
 )
 
-#: Samples of a pixel summed on their own before they join the image's sums (see the module's docstring): the
-#: unit of work a cluster hands out, fixed so that every split adds the same numbers in the same order.
-SAMPLE_BLOCK = 64
+#: Samples of a pixel summed on their own before they join the image's sums (see the module's docstring), fixed
+#: so that every split adds the same numbers in the same order. Large, because every block of a cluster render
+#: brings one image of float64 sums back to the machine that adds them, the one part of the work that does not
+#: spread over the workers (docs/cluster.md: 1024 keeps it under 2% of the work on 100 workers); a cluster cuts
+#: a block into bands of rows instead. A render of at most SAMPLE_BLOCK samples sums them in plain sample order.
+SAMPLE_BLOCK = 1024
 #: Seconds a pass should take once the first pass has shown the speed (progress, --time-limit, Ctrl-C).
 PASS_SECONDS = 1.0
 _MODES = {"mis": MODE_MIS, "light": MODE_LIGHT, "bsdf": MODE_BSDF}
@@ -66,16 +69,17 @@ class PathJob:
     sampler: np.int64
     filter_kind: np.int64
     keep: np.int64
+    block: int  # SAMPLE_BLOCK when the job was made (a worker reads it here, not from its own module)
 
     @property
     def blocks(self) -> int:
         """Number of sample blocks: the last one holds the remainder of spp."""
-        return -(-int(self.spp) // SAMPLE_BLOCK)
+        return -(-int(self.spp) // self.block)
 
     def block_samples(self, block: int) -> tuple[int, int]:
         """Samples [s0, s1) of block `block`."""
-        s0 = block * SAMPLE_BLOCK
-        return s0, min(s0 + SAMPLE_BLOCK, int(self.spp))
+        s0 = block * self.block
+        return s0, min(s0 + self.block, int(self.spp))
 
 
 def path_job(compiled, camera, settings) -> PathJob:
@@ -90,7 +94,7 @@ def path_job(compiled, camera, settings) -> PathJob:
         sampler=np.int64(SAMPLER_SOBOL if settings.sampler == "sobol" else SAMPLER_INDEPENDENT),
         filter_kind=np.int64(FILTER_CENTRE if settings.antialias == "none" else
                              FILTER_GAUSSIAN if settings.filter == "gaussian" else FILTER_BOX),
-        keep=np.int64(_keep(settings)))
+        keep=np.int64(_keep(settings)), block=SAMPLE_BLOCK)
 
 
 class PathSums:
@@ -228,7 +232,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
     per_sample_s = None
 
     def film(final=False):
-        sums = total if block.empty else total.plus(block, first_block=done <= SAMPLE_BLOCK)
+        sums = total if block.empty else total.plus(block, first_block=done <= job.block)
         return film_of(sums, done, settings, threads, passes, stopped, final)
 
     with _StopOnSigint() as sigint:
@@ -238,7 +242,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
             t0 = _time.perf_counter()
             end = done + n
             while done < end:  # the pass, cut where blocks end
-                cut = min(end, (done // SAMPLE_BLOCK + 1) * SAMPLE_BLOCK)
+                cut = min(end, (done // job.block + 1) * job.block)
                 for y0, y1 in bands:
                     block.trace(job, y0, y1, done, cut)
                     if progress is not None:
@@ -246,8 +250,8 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
                         if settings.time_limit is not None:
                             fraction = max(fraction, min((_time.perf_counter() - started) / settings.time_limit, 1.0))
                         progress(min(fraction, 1.0))
-                if cut % SAMPLE_BLOCK == 0 or cut == spp:
-                    total.add(block, first_block=cut <= SAMPLE_BLOCK)
+                if cut % job.block == 0 or cut == spp:
+                    total.add(block, first_block=cut <= job.block)
                     block.clear()
                 done = cut
             passes += 1
@@ -261,7 +265,7 @@ def render_path(compiled, camera, settings, progress=None, on_pass=None) -> Film
             if on_pass is not None:
                 on_pass(film())
     if not block.empty:  # stopped inside a block: its samples count
-        total.add(block, first_block=done <= SAMPLE_BLOCK)
+        total.add(block, first_block=done <= job.block)
         block.clear()
     return film(final=True)
 

@@ -24,7 +24,7 @@ from ..kernels.surface import shading_side, surface_at
 from ..kernels.bump import material_in_cone
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
-from .common import Film, finish, run_bands, start
+from .common import Film, finish, row_bands, run_bands, start
 
 
 @njit
@@ -124,11 +124,12 @@ def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, mi
 _NO_PIXEL = np.array([-1, -1], np.int64)
 
 
-def render_raycast(compiled, camera, settings, progress=None, explain=None) -> Film:
+def render_raycast(compiled, camera, settings, progress=None, explain=None, rows=None) -> Film:
     """Ray-cast `compiled` (a `CompiledScene`) through `camera` with `settings` (a `RenderSettings`).
 
     `progress(fraction)` is called after each band of rows. Returns a `Film`. `explain` = (x, y, light_log):
-    only row y is rendered, and pixel (x, y)'s per-light shares go to light_log (`lumos.explain`).
+    only row y is rendered, and pixel (x, y)'s per-light shares go to light_log (`lumos.explain`). `rows` =
+    (y0, y1): only those rows are rendered (a cluster's tile; the others stay as allocated).
     """
     width, height = settings.width, settings.height
     # the surface AOV buffers only when one of them is asked for (writing them costs about a fifth of a render of
@@ -136,7 +137,7 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
     threads, b = start(settings, aovs_if_asked=True)
     spp = 1 if settings.antialias == "none" else settings.spp
     cam_vecs, cam_params = camera_arrays(camera)
-    pixel, light_log, bands = _NO_PIXEL, np.zeros((0, PER_LIGHT_SIZE)), None
+    pixel, light_log, bands = _NO_PIXEL, np.zeros((0, PER_LIGHT_SIZE)), row_bands(height, rows=rows)
     if explain is not None:
         pixel, light_log, bands = np.array(explain[:2], np.int64), explain[2], [(explain[1], explain[1] + 1)]
     run_bands(lambda r0, r1: _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, r0, r1, spp,
@@ -145,4 +146,4 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None) -> F
                                            light_log),
               height, progress, bands)
     return finish(settings, b, threads, np.full((height, width), spp, np.int32), int(b.rays_per_row.sum()),
-                  primary_rays=width * height * spp)
+                  primary_rays=width * sum(y1 - y0 for y0, y1 in bands) * spp)

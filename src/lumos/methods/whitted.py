@@ -36,7 +36,7 @@ from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
 from ..errors import LumosError
 from ..kernels.views import geometry_of, lighting_of, owned_views, sky_of, surfaces_of, textures_of
 from .adaptive import adaptive_pixel, adaptive_rows, aov_rows, corner_rows
-from .common import SURFACE_AOVS, TERM_CHANNELS, Film, finish, run_bands, start
+from .common import SURFACE_AOVS, TERM_CHANNELS, Film, finish, row_bands, run_bands, start
 from .whitted_trace import LOG_DEPTH, LOG_FX, LOG_FY, point_radiance, shutter_time, store_aovs, trace, trace_scratch
 
 AA_NONE, AA_SUPERSAMPLE, AA_ADAPTIVE = 0, 1, 2
@@ -162,8 +162,10 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
     return value, log, scratch[9], log_n[0], weight
 
 
-def render_whitted(compiled, camera, settings, progress=None) -> Film:
-    """Whitted-trace `compiled` (a `CompiledScene`) through `camera` with `settings` (a `RenderSettings`)."""
+def render_whitted(compiled, camera, settings, progress=None, rows=None) -> Film:
+    """Whitted-trace `compiled` (a `CompiledScene`) through `camera` with `settings` (a `RenderSettings`); with
+    `rows` = (y0, y1) only those rows (a cluster's tile; every pixel is computed from its own corners and
+    samples, so a tile's pixels are those of the whole image)."""
     width, height = settings.width, settings.height
     threads, b = start(settings, bytes_per_pixel=80)
     cam_vecs, cam_params = camera_arrays(camera)
@@ -178,26 +180,29 @@ def render_whitted(compiled, camera, settings, progress=None) -> Film:
     w, h = np.int64(width), np.int64(height)
     samples = np.zeros((height, width), np.int32)
     rays = 0
+    y_lo, y_hi = (0, height) if rows is None else rows
+    bands = row_bands(height, rows=(y_lo, y_hi))
     if mode == AA_ADAPTIVE:
         corners = np.zeros((height + 1, width + 1, 3 + TERM_CHANNELS if b.want_terms else 3))
         corner_rays = np.zeros(height + 1, np.int64)
         half = None if progress is None else (lambda f: progress(0.5 * f))
         run_bands(lambda r0, r1: corner_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                             seed, max_depth, mipmap, corners, corner_rays), height + 1, half)
+                                             seed, max_depth, mipmap, corners, corner_rays), height + 1, half,
+                  row_bands(height + 1, rows=(y_lo, y_hi + 1)))
         rest = None if progress is None else (lambda f: progress(0.5 + 0.5 * f))
         run_bands(lambda r0, r1: adaptive_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
                                                seed, max_depth, mipmap, float(settings.adaptive_threshold),
                                                np.int64(settings.adaptive_depth), corners, b.radiance, samples,
-                                               b.terms, b.rays_per_row), height, rest)
+                                               b.terms, b.rays_per_row), height, rest, bands)
         if set(settings.aov) & set(SURFACE_AOVS):
             run_bands(lambda r0, r1: aov_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
                                               seed, max_depth, mipmap, b.depth, b.normal, b.albedo, b.object_id,
-                                              b.rays_per_row), height)
+                                              b.rays_per_row), height, None, bands)
         rays = int(corner_rays.sum())
     else:
         spp = np.int64(1 if mode == AA_NONE else settings.spp)
         run_bands(lambda r0, r1: _sample_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
                                               spp, seed, max_depth, mipmap, b.radiance, b.depth, b.normal, b.albedo,
                                               b.object_id, samples, b.terms, b.want_terms, b.rays_per_row),
-                  height, progress)
+                  height, progress, bands)
     return finish(settings, b, threads, samples, rays + int(b.rays_per_row.sum()), primary_rays=int(samples.sum()))

@@ -14,10 +14,14 @@ import numpy as np
 
 def scene_digest(scene, sides=None) -> str:
     """A fingerprint of what a solution depends on: the objects, lights and materials (not the camera, the
-    image size, the display settings, the background or the ambient term, so a saved solution renders any
-    view), and `sides`: which sides of which objects are patches (the inside of a solid is one only when the
-    camera or a light is in it, so a solution solved from outside a box cannot draw the view from inside)."""
-    data = scene.model_dump(exclude={"camera", "render", "background", "ambient"}, warnings=False)
+    image size, the display settings, the background, the ambient term or the animation block, so a saved
+    solution renders any view), and `sides`: which sides of which objects are patches (the inside of a solid is
+    one only when the camera or a light is in it, so a solution solved from outside a box cannot draw the view
+    from inside)."""
+    data = scene.model_dump(exclude={"camera", "render", "background", "ambient", "animation"}, warnings=False)
+    for light in data.get("lights", []):  # lights without a name hash as before lights could have one
+        if light.get("name") is None:
+            light.pop("name", None)
     if sides is not None:
         data["_sides"] = np.asarray(sides)
 

@@ -16,6 +16,8 @@ from .types import Color, Direction, NonNegative, Positive, StrictModel, Vec3, c
 class _LocalLight(StrictModel):
     """Id and Is of the classic model: `intensity` sets both; `diffuse` / `specular` override one."""
 
+    #: a name, to animate the light by (`lights[<name>].intensity`)
+    name: Optional[str] = None
     intensity: Color = (1.0, 1.0, 1.0)
     diffuse: Optional[Color] = None
     specular: Optional[Color] = None
@@ -83,6 +85,8 @@ class _AreaLight(StrictModel):
     light's is `radiance`). Without one it reflects nothing."""
 
     type: Literal["area"]
+    #: a name, to animate the light by (`lights[<name>].radiance`)
+    name: Optional[str] = None
     radiance: Color = (1.0, 1.0, 1.0)
     samples: Annotated[int, Field(ge=1, le=4096)] = 16
     two_sided: bool = False

@@ -84,6 +84,8 @@ def load_scene(source: str | os.PathLike | dict, view: Optional[str] = None, up:
         scene = Scene.model_validate(data)
     except ValidationError as exc:
         raise SceneError(format_validation_error(exc, name, lines=lines, data=data)) from None
+    if scene.animation is not None:
+        _check_animation(scene, name, lines)
     _load_meshes(scene, folder, name, lines)
     _resolve_texture_files(scene, folder, name, lines)
     _expand_models(scene, folder, name, lines, included)
@@ -276,6 +278,16 @@ class _Builder:
 
 def _short_tag(tag: str) -> str:
     return "!!" + tag[len(_YAML):] if tag.startswith(_YAML) else tag
+
+
+def _check_animation(scene: Scene, name: str, lines: Optional[dict]) -> None:
+    """The animation's tracks against the scene (targets, key order, key values): `animation.check`."""
+    from .animation import AnimationError, check
+
+    try:
+        check(scene)
+    except AnimationError as exc:
+        raise SceneError(f"{location(name, lines, exc.where)}: {exc}") from None
 
 
 # --------------------------------------------------------------------------------------------- mesh files

@@ -43,6 +43,15 @@ def format_validation_error(
     return text
 
 
+def first_error(exc: ValidationError, data: Any = None) -> tuple[tuple, str]:
+    """(key path, message) of the first error of `exc`, worded as `format_validation_error` words it (the key
+    path relative to the validated model, e.g. ('position',) for a Camera)."""
+    root = getattr(_model, exc.title, None)
+    err = exc.errors(include_url=False)[0]
+    path, _, message, _ = _explain(err, *_locate(err["loc"], root, data))
+    return path, message
+
+
 def format_path(path: tuple) -> str:
     """('objects', 2, 'radius') -> 'objects[2].radius'."""
     out = ""

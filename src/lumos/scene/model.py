@@ -54,6 +54,9 @@ from .objects import (
     Sphere,
     Triangle,
 )
+from .keyframes import (
+    Animation,
+)
 from .lights import (
     DirectionalLight,
     DiskLight,
@@ -69,6 +72,7 @@ from .lights import (
 
 __all__ = [
     "AOV_NAMES",
+    "Animation",
     "Box",
     "Bump",
     "Camera",
@@ -125,6 +129,8 @@ class Scene(StrictModel):
     environment: Optional[Environment] = None
     materials: dict[str, Material] = Field(default_factory=dict)
     objects: list[Object] = Field(default_factory=list)
+    #: keyframed tracks over time (`lumos.scene.animation`); the rest of the scene is its state where no track says
+    animation: Optional[Animation] = None
     _source: Optional[Path] = PrivateAttr(default=None)
     #: what the loader included from model files (`type: model`, a camera's `file`), one line each, for `lumos info`
     _included: list = PrivateAttr(default_factory=list)
