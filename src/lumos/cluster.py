@@ -246,6 +246,19 @@ def _run_pieces(client, piece: Callable, shipped, todo: list[tuple], stats: Clus
         raise
 
 
+def _resume(pieces: list, store, stats: ClusterStats, take) -> list:
+    """Hand the pieces the checkpoint folder holds to take(args, result); returns the others, still to render."""
+    todo = []
+    for args in pieces:
+        saved = store.load(args) if store is not None else None
+        if saved is not None:
+            stats.resumed += 1
+            take(args, saved)
+        else:
+            todo.append(args)
+    return todo
+
+
 def _bands(height: int, count: int) -> list[tuple[int, int]]:
     from .methods.common import row_bands
 
@@ -278,14 +291,22 @@ def _render_path(client, compiled, camera, settings, n_workers, progress, store,
     stats.pieces = len(pieces)
     total = PathSums(job)
     arrived: dict[tuple, list] = {}
-    state = {"next": 0, "blocks_done": 0, "work_done": 0}
+    state = {"next": 0, "blocks_done": 0, "work_done": 0, "samples": 0, "pieces": 0}
     work = int(job.height) * job.blocks
+    started = time.perf_counter()
+    note = getattr(progress, "note", None)
 
     def take(args, sums: list):
         arrived[args] = sums
         if store is not None:
             store.save(args, sums)
         state["work_done"] += (args[1] - args[0]) * (args[3] - args[2])
+        state["pieces"] += 1
+        state["samples"] += sum(int(np.diff(job.block_samples(b))[0]) for b in range(args[0], args[1])) * \
+            (args[3] - args[2]) * int(job.width)
+        if note is not None:
+            rate = state["samples"] / max(time.perf_counter() - started, 1e-9)
+            note(f"{state['pieces']}/{len(pieces)} pieces, {rate / 1e6:.2f} M samples/s")
         # add whole groups of blocks, in block order; within a block, its bands in band order
         while state["next"] < len(pieces):
             mine = pieces[state["next"]:state["next"] + len(bands)]
@@ -301,14 +322,7 @@ def _render_path(client, compiled, camera, settings, n_workers, progress, store,
         if progress is not None:
             progress(min(state["work_done"] / work, 1.0))
 
-    todo = []
-    for args in pieces:
-        saved = store.load(args) if store is not None else None
-        if saved is not None:
-            stats.resumed += 1
-            take(args, saved)
-        else:
-            todo.append(args)
+    todo = _resume(pieces, store, stats, take)
     stopped = None
     if todo:
         shipped = _scatter(client, job, stats)
@@ -356,14 +370,7 @@ def _render_tiles(client, shipped, n_workers, progress, store, stats):
         if progress is not None:
             progress(counts["rows"] / h)
 
-    todo = []
-    for args in bands:
-        saved = store.load(args) if store is not None else None
-        if saved is not None:
-            stats.resumed += 1
-            take(args, saved)
-        else:
-            todo.append(args)
+    todo = _resume(bands, store, stats, take)
     if todo:
         shipped = _scatter(client, shipped, stats)
         if tiled:
