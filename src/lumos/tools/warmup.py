@@ -30,6 +30,7 @@ FAMILIES = {
     "path": "path tracing",
     "radiosity": "radiosity: form factors, the solver, the display",
     "queries": "lumos.RayCaster's ray queries",
+    "explain": "lumos explain: one pixel's ray tree and terms (raycast, whitted, raster)",
 }
 #: families compiled first, in this process (the others, in their own processes, load what they share)
 FIRST = ("bvh",)
@@ -157,9 +158,17 @@ def _warm_queries() -> None:
     rc.path_length(o, d, 20.0)
 
 
+def _warm_explain() -> None:
+    from .explain import explain
+
+    for method in ("raycast", "whitted", "raster"):
+        explain(_scene(), SMALL["width"] // 2, SMALL["height"] // 2, method=method, **SMALL)
+    explain(_scene(), 3, 3, method="whitted", antialias="adaptive", adaptive_depth=1, **SMALL)
+
+
 _WORK: dict[str, Callable[[], None]] = {
     "bvh": _warm_bvh, "raycast": _warm_raycast, "raster": _warm_raster, "whitted": _warm_whitted,
-    "path": _warm_path, "radiosity": _warm_radiosity, "queries": _warm_queries,
+    "path": _warm_path, "radiosity": _warm_radiosity, "queries": _warm_queries, "explain": _warm_explain,
 }
 
 
