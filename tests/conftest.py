@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import RADIANCE
+from helpers import DATA, RADIANCE
 
 import lumos
 from lumos.compile import compile_scene
@@ -152,3 +152,12 @@ def solution() -> Solution:
                "residual": np.float64(1e-17)},
         scene_digest="3f786850e387550fdab836ed7e6dc881de23001b",
     )
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    """The preview's tests: a copy of tests/data/preview/ball.yaml in a folder of its own (Save writes beside it)."""
+    path = tmp_path / "scenes" / "ball.yaml"
+    path.parent.mkdir()
+    path.write_text((DATA / "preview" / "ball.yaml").read_text())
+    return path

@@ -99,7 +99,7 @@ def entry_point(name: str) -> Callable:
 
 def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] = False,
            on_pass: Optional[Callable[["Image"], None]] = None, solution=None, client=None,
-           checkpoint: Optional[str] = None, resume: bool = False, **settings) -> "Image":
+           checkpoint: Optional[str] = None, resume: bool = False, live: Any = None, **settings) -> "Image":
     """Render `scene` (a Scene, a dict or a path) and return an `Image`.
 
     `settings` override the scene's `render:` block: method, width, height, spp, max_depth, seed, shading,
@@ -113,11 +113,17 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
     `checkpoint` (a folder): keep every finished piece (path: blocks of samples; raycast, whitted: bands of rows)
     there, and with `resume=True` go on from the pieces a stopped run left.
 
+    `live`: watch the image refine (`lumos.live`): True shows it in a Jupyter notebook, updated in place after each
+    pass; 'tev' or 'tev:HOST:PORT' streams it to a running tev viewer; or a sink object of yours with
+    `update(image, final)` and `close()` (e.g. `lumos.live.TevSink(...)`), which the caller closes. The other methods
+    send only the finished image.
+
     `stats` holds the timings: load_s, build_s (flatten + BVH), render_s and total_s, and jit_s, the time
     Numba spent compiling kernels (a first run only), which build_s and render_s exclude.
     """
     from .jitwatch import estimate_s, watch_compiles
     from .image import Image
+    from .live import close_on_error, open_sink
     from .methods import compile_for
     from .progress import make_progress
     from .scene.loader import load_scene
@@ -154,10 +160,17 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
             if cfg.method != "radiosity":
                 raise LumosError(f"solution: a radiosity solution is drawn by method radiosity, not {cfg.method}")
             kwargs["solution"] = solution
-        if on_pass is not None and cfg.method == "path":
-            kwargs["on_pass"] = lambda film: on_pass(Image(film.radiance, aovs=film.aovs, exposure=cfg.exposure,
-                                                           stats=dict(film.extra)))
-        with make_progress(progress) as report:
+        sink, own_sink = open_sink(live)
+        pass_sink = sink if client is None and checkpoint is None else None  # on workers: the final image only
+        if (on_pass is not None or pass_sink is not None) and cfg.method == "path":
+            def each_pass(film):
+                image = Image(film.radiance, aovs=film.aovs, exposure=cfg.exposure, stats=dict(film.extra))
+                if on_pass is not None:
+                    on_pass(image)
+                if pass_sink is not None:
+                    pass_sink.update(image, final=False)
+            kwargs["on_pass"] = each_pass
+        with make_progress(progress) as report, close_on_error(sink, own_sink):
             if client is not None or checkpoint is not None:
                 if kwargs:
                     raise LumosError("render: on_pass and solution are for renders in this process, without a "
@@ -187,7 +200,14 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
         "mrays_per_s": film.rays / max(render_s, 1e-9) / 1e6,
     }
     stats.update(film.extra)
-    return Image(film.radiance, aovs=film.aovs, stats=stats, exposure=cfg.exposure)
+    image = Image(film.radiance, aovs=film.aovs, stats=stats, exposure=cfg.exposure)
+    if sink is not None:
+        try:
+            sink.update(image, final=True)
+        finally:
+            if own_sink:
+                sink.close()
+    return image
 
 
 def scene_info(scene: Scene) -> dict:

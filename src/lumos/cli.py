@@ -6,6 +6,7 @@
     lumos sheet SCENE [-o OUT.png] [--width W] [--height H] [--spp N] [--threads T] [--columns C] [--methods M,...]
                 [--reference METHOD [--diff]]
     lumos explain SCENE --pixel X Y [--method M] [--json] [every render flag]
+    lumos serve SCENE [--host H] [--port P] [--method M] [--width W --height H] [--open]
 
 Exit codes: 0 success; 2 bad input or usage (one line `lumos: error: <message>` on stderr); 1 internal error
 (rerun with LUMOS_DEBUG=1 for the traceback); 130 interrupted.
@@ -64,7 +65,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except SystemExit as exc:  # --help, --version, usage errors (argparse prints them)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     try:
-        if args.command in ("render", "sheet", "explain"):
+        if args.command in ("render", "sheet", "explain", "serve"):
             _skip_numba_blas_probe()
         with warnings.catch_warnings():
             warnings.simplefilter("default", LumosWarning)  # each message once
@@ -170,6 +171,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "--frames an animated scene renders frame 0")
     render.add_argument("--stats", metavar="FILE.json", help="write timings and ray counts as JSON")
     render.add_argument("-q", "--quiet", action="store_true", help="no progress bar and no summary")
+    render.add_argument("--preview", nargs="?", const="browser", metavar="TARGET", help="show the render as it "
+                        "refines: browser (the default: a page on 127.0.0.1 whose address is printed, served until "
+                        "Ctrl-C once the image is written), browser:PORT, browser:HOST:PORT, tev or tev:HOST:PORT (a "
+                        "running tev viewer, 127.0.0.1:14158 by default). Put it after SCENE (docs/preview.md)")
     farm = render.add_argument_group("a cluster, and resuming a stopped render (docs/cluster.md)")
     farm.add_argument("--cluster", metavar="SPEC", help="render on Dask workers: local or local:N (N worker "
                       "processes here), or a scheduler's address (tcp://HOST:8786, tls://… with Dask's TLS "
@@ -271,6 +276,28 @@ def build_parser() -> argparse.ArgumentParser:
                        "transmitted) and their sum, the image. METHOD: raycast, whitted or raster:SHADING")
     sheet.add_argument("-q", "--quiet", action="store_true", help="no progress lines and no summary")
     sheet.set_defaults(run=run_sheet)
+
+    serve = commands.add_parser("serve", help="a live preview page: edit the scene and watch it render",
+                                description="Serve a page that renders SCENE progressively and lets you edit it "
+                                "live: method and shading, the camera (drag to orbit), lights, materials, exposure, "
+                                "tone map, AOVs and terms, a pixel's explanation, and Save to a new scene file. "
+                                "Prints the page's address (with its access token) and serves until Ctrl-C "
+                                "(docs/preview.md). Needs pip install \"lumos[preview]\".")
+    serve.add_argument("scene", metavar="SCENE", help="scene file (.yaml, .yml or .json)")
+    serve.add_argument("--host", default="127.0.0.1", metavar="H", help="address to listen on (default 127.0.0.1, "
+                       "this machine only; any other is warned about: the token is then all that guards the page)")
+    serve.add_argument("--port", type=int, default=0, metavar="P", help="port (default 0: a free one)")
+    serve.add_argument("--method", metavar="M", help=f"rendering method to start with: {METHOD_HELP}")
+    serve.add_argument("--shading", metavar="S", help="flat, gouraud or phong (method raster)")
+    serve.add_argument("--width", type=int, metavar="W", help="preview width in pixels (default: the scene's, "
+                       "scaled to fit 320)")
+    serve.add_argument("--height", type=int, metavar="H", help="preview height in pixels")
+    serve.add_argument("--spp", type=int, metavar="N", help="samples per pixel (default: the scene's; path: at "
+                       "least 256, refined pass by pass)")
+    serve.add_argument("--exposure", type=float, metavar="E", help="exposure to start with")
+    serve.add_argument("--open", action=argparse.BooleanOptionalAction, default=False, help="open the page in "
+                       "the default web browser (default: --no-open)")
+    serve.set_defaults(run=run_serve)
     return parser
 
 
@@ -388,19 +415,22 @@ def run_render(args: argparse.Namespace, started: float) -> int:
                 else "--time-limit")
         raise LumosError(f"{flag} is for a render in this process, not with --cluster or --checkpoint")
     farm = {"checkpoint": args.checkpoint, "resume": args.resume}
-    if args.cluster:
-        from .cluster import connect
+    target = None
+    if args.preview is not None:
+        if args.cluster or args.checkpoint:
+            raise LumosError("--preview shows a render made in this process, not with --cluster or --checkpoint")
+        from .preview.targets import open_target
 
-        client, close = connect(args.cluster)
-        try:
-            if not args.quiet and client.dashboard_link:
-                print(f"lumos: Dask dashboard at {client.dashboard_link}", file=sys.stderr)
-            img = api.render(scene, progress=not args.quiet, client=client, **farm, **overrides)
-        finally:
-            close()
-    else:
-        img = api.render(scene, progress=not args.quiet, on_pass=on_pass, solution=args.solution, **farm,
-                         **overrides)
+        target = open_target(args.preview, scene, cfg, Path(args.scene).name, quiet=args.quiet)
+        on_pass = _both(on_pass, target.on_pass)
+    try:
+        img = _render_image(args, api, scene, on_pass, farm, overrides)
+    except BaseException:
+        if target is not None:
+            target.close()
+        raise
+    if target is not None:
+        target.done(img)
     img.save(out)
     stats = dict(img.stats, load_s=load_s, total_s=time.perf_counter() - started)
     if args.stats:
@@ -414,7 +444,31 @@ def run_render(args: argparse.Namespace, started: float) -> int:
             from .cluster import describe
 
             print(f"lumos: {describe(stats)}", file=sys.stderr)
+    if target is not None:
+        target.finish()
     return 0
+
+
+def _both(first, second):
+    """One `on_pass` callback that calls `first` (or nothing) and then `second`."""
+    if first is None:
+        return second
+    return lambda image: (first(image), second(image))
+
+
+def _render_image(args, api, scene, on_pass, farm, overrides):
+    """The image of `lumos render`: here, or on the cluster `--cluster` names."""
+    if args.cluster:
+        from .cluster import connect
+
+        client, close = connect(args.cluster)
+        try:
+            if not args.quiet and client.dashboard_link:
+                print(f"lumos: Dask dashboard at {client.dashboard_link}", file=sys.stderr)
+            return api.render(scene, progress=not args.quiet, client=client, **farm, **overrides)
+        finally:
+            close()
+    return api.render(scene, progress=not args.quiet, on_pass=on_pass, solution=args.solution, **farm, **overrides)
 
 
 def _is_video(output: Optional[str]) -> bool:
@@ -450,6 +504,8 @@ def run_render_frames(args: argparse.Namespace, started: float) -> int:
     from .io.video import check_video_path
     from .scene.loader import load_scene
 
+    if args.preview is not None:
+        raise LumosError("--preview shows one render as it refines; it does not take --frames or a video output")
     video = _is_video(args.output)
     pattern = args.output or f"{Path(args.scene).stem}_%04d.png"
     if video:
@@ -562,6 +618,31 @@ def _checkpointer(out: Path, every: float):
             last[0] = now
 
     return save
+
+
+def run_serve(args: argparse.Namespace, started: float) -> int:
+    """`lumos serve SCENE`: the preview page (lumos.preview), served until Ctrl-C."""
+    from .preview.server import PreviewServer, warn_if_exposed
+    from .preview.session import Session
+
+    settings = {key: getattr(args, key) for key in ("method", "shading", "width", "height", "spp", "exposure")}
+    session = Session.from_file(args.scene, start=False, **settings)  # a bad scene or flag fails here
+    try:
+        server = PreviewServer(session, args.host, args.port)
+        session.start()  # the first image is on its way before the page asks for it
+        warn_if_exposed(args.host)
+        print(f"lumos: preview at {server.url}", file=sys.stderr, flush=True)
+        if args.open:
+            import webbrowser
+
+            webbrowser.open(server.url)
+        server.serve()  # until Ctrl-C: uvicorn shuts down, then raises it again
+    except KeyboardInterrupt:
+        pass  # Ctrl-C is how the preview ends
+    finally:
+        session.close()
+    print("lumos: preview stopped", file=sys.stderr)
+    return 0
 
 
 def run_warmup(args: argparse.Namespace, started: float) -> int:

@@ -47,11 +47,13 @@ _TOP_KEYS = ", ".join(Scene.model_fields)
 # ------------------------------------------------------------------------------------------------ entry point
 
 
-def load_scene(source: str | os.PathLike | dict, view: Optional[str] = None, up: Optional[str] = None) -> Scene:
+def load_scene(source: str | os.PathLike | dict, view: Optional[str] = None, up: Optional[str] = None,
+               folder: Optional[str | os.PathLike] = None) -> Scene:
     """Load, validate and complete a scene from a `.yaml`/`.yml`/`.json` file, a dict, or a model file (`.obj`,
     `.gltf`, `.glb`, `.ply`, `.stl`, `.off`: the model with a camera, lights and a method made up for it).
 
-    Mesh files are read (relative to the scene file's folder, or to the current folder for a dict). For a model
+    Mesh files are read (relative to the scene file's folder, or for a dict to `folder`, by default the current
+    folder: a scene file's dict edited in memory, as the preview page does, keeps its folder). For a model
     file, `view` (three-quarter, front, back, left, right or top) and `up` ("y" or "z") choose the made-up
     camera; for a scene, which has its own camera, they are refused.
     Raises `SceneError` (a `LumosError`) with a one-line message for any bad input.
@@ -77,7 +79,7 @@ def load_scene(source: str | os.PathLike | dict, view: Optional[str] = None, up:
     if not isinstance(data, dict):
         raise SceneError(f"{location(name, lines, ())}: the top level must be a mapping ({_TOP_KEYS}), "
                          f"got {show(data)}")
-    folder = path.parent if path else Path.cwd()
+    folder = path.parent if path else Path(folder) if folder is not None else Path.cwd()
     included = []
     data = _camera_from_file(data, folder, name, lines, included)
     try:
