@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import copy
 
+import numpy as np
+import pytest
 import yaml
 from helpers import EXAMPLES
 
@@ -34,3 +36,22 @@ def test_what_the_compiled_scene_depends_on():
     blurred = copy.deepcopy(SHOWCASE)
     blurred["camera"]["shutter"] = [0.0, 1.0]
     assert key(blurred, "raycast") != key(SHOWCASE, "raycast")
+
+
+@pytest.mark.parametrize("method, settings", [("raycast", {"aov": ["depth"]}),
+                                              ("whitted", {"antialias": "adaptive", "adaptive_depth": 1})])
+def test_raycast_and_whitted_show_their_image_band_by_band_and_end_with_the_whole_render(method, settings):
+    import lumos
+    from lumos.preview import renderer as R
+
+    scene = load_scene(EXAMPLES / "showcase.yaml")
+    cfg = resolve_settings(scene, {"method": method, "width": 40, "height": 24, **settings})
+    shown = []
+    image = R.Renderer().render(SHOWCASE, scene, cfg, check=lambda f: None,
+                                on_pass=lambda img: shown.append(img.array.copy()))
+    assert len(shown) == R.BANDS - 1
+    assert not shown[0][-1].any() and shown[0][0].any()  # the first band drawn, the last rows not yet
+    whole = lumos.render(scene, method=method, width=40, height=24, **settings)
+    np.testing.assert_array_equal(image.array, whole.array)
+    for name in whole.aovs:
+        np.testing.assert_array_equal(image.aovs[name], whole.aovs[name])

@@ -10,7 +10,9 @@ view-independent and kept in the same way, so orbiting a radiosity scene draws t
 solving.
 
 Each render calls `check` between bands of rows (and between path's passes): the preview's session raises there
-to drop a render an edit made stale.
+to drop a render an edit made stale. Given `on_pass`, path shows each pass, and raycast and whitted their image
+band by band (`BANDS` bands of rows, each rendered with the method's `rows=`; every pixel is computed by itself,
+so the image is the one a whole render gives).
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ from __future__ import annotations
 import json
 import time
 from typing import Callable, Optional
+
+import numpy as np
 
 from ..api import entry_point
 from ..image import Image
@@ -27,6 +31,8 @@ from ..methods import compile_for
 COMPILE_SETTINGS = {"raster": ("tessellation", "shadows"), "radiosity": ("radiosity", "seed")}
 #: Methods whose compiled scene is the same (`methods.compile_for` does nothing method-specific for them).
 SHARED_COMPILE = {"raycast": "rays", "whitted": "rays"}
+#: Bands of rows raycast and whitted show one after another while they render for the page.
+BANDS = 8
 
 
 class Renderer:
@@ -52,8 +58,32 @@ class Renderer:
             started = time.perf_counter()
             kwargs["on_pass"] = lambda film: on_pass(_image(film, cfg, time.perf_counter() - started))
         t0 = time.perf_counter()
+        if cfg.method in SHARED_COMPILE and on_pass is not None:
+            return self._by_bands(compiled, scene.camera, cfg, check, on_pass)
         film = entry_point(cfg.method)(compiled, scene.camera, cfg, progress=check, **kwargs)
         return _image(film, cfg, time.perf_counter() - t0)
+
+    def _by_bands(self, compiled, camera, cfg, check, on_pass) -> Image:
+        """raycast or whitted band by band: on_pass(the image so far) after each band but the last."""
+        from ..methods.common import Film, row_bands
+
+        render = entry_point(cfg.method)
+        started = time.perf_counter()
+        radiance = np.zeros((cfg.height, cfg.width, 3), np.float32)
+        aovs: dict = {}
+        rays = 0
+        bands = row_bands(cfg.height, BANDS)
+        for k, (y0, y1) in enumerate(bands):
+            part = render(compiled, camera, cfg, rows=(y0, y1))
+            radiance[y0:y1] = part.radiance[y0:y1]
+            for name, buf in part.aovs.items():
+                aovs.setdefault(name, np.zeros_like(buf))[y0:y1] = buf[y0:y1]
+            rays += part.rays
+            check((k + 1) / len(bands))
+            film = Film(radiance, aovs, rays)
+            if k + 1 < len(bands):
+                on_pass(_image(film, cfg, time.perf_counter() - started))
+        return _image(film, cfg, time.perf_counter() - started)
 
     def _compile(self, key: str, scene, cfg):
         if self._compiled[0] != key:
