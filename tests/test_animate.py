@@ -147,3 +147,27 @@ def test_a_radiosity_animation_that_moves_a_light_solves_every_frame():
     tracks = [{"target": f"materials[{name}].kd", "keys": [{"frame": 0, "value": 0.2}, {"frame": 1, "value": 0.6}]}]
     images = list(render_frames(cornell(tracks, frames=2)))
     assert [img.stats["radiosity_solves"] for img in images] == [1, 1]
+
+
+# ------------------------------------------------------------------------------------------ motion blur
+
+
+def blurred(motion_samples, shutter=(0.0, 1.0)):
+    data = copy.deepcopy(SCENE)
+    data["camera"]["shutter"] = list(shutter)
+    data["objects"] = data["objects"][:1] + [{"type": "plane", "point": [0, -1, 0], "material": {"kd": 0.5}}]
+    data["animation"] = {"fps": 1, "frames": 2, "motion_samples": motion_samples, "tracks": [
+        {"target": "lights[key].intensity", "keys": [{"time": 0, "value": 0.0}, {"time": 1, "value": 2.0}]}]}
+    return lumos.load_scene(data)
+
+
+def test_motion_samples_blur_every_track_along_its_curve_over_the_shutter():
+    """A light ramping 0 → 2 while the shutter is open: sub-frames average it to the light at its mean, 1 (the
+    image is linear in the light); without sub-frames a light does not blur (the frame shows it at time 0)."""
+    still = lumos.render(scene_at(blurred(1, shutter=(0.0, 0.0)), 0.5))  # the light at 1, shutter closed
+    blur = render_frame(blurred(8), 0)
+    assert blur.stats["motion_samples"] == 8
+    np.testing.assert_allclose(blur.array, still.array, rtol=1e-5, atol=1e-6)
+    unblurred = render_frame(blurred(1), 0)
+    assert unblurred.array.max() < 0.5 * still.array.max()  # the light at 0: only the ambient
+    assert [img.array.tobytes() for img in render_frames(blurred(8), frames=[0])] == [blur.array.tobytes()]

@@ -91,17 +91,45 @@ def frame_indices(scene, frames=None) -> list[int]:
     return [int(k) for k in frames]
 
 
+def render_at(scene, t: float, solution=None, progress=False, **settings) -> "Image":
+    """The scene at time `t` rendered: `lumos.render(scene_at(scene, t))`, or, with the animation's
+    `motion_samples` N > 1 and the camera's shutter open, the mean of N renders of the scene at the times
+    t + open + (i + ½)/N · (close − open), each with the shutter closed (an accumulation buffer, Haeberli and
+    Akeley 1990): every track — rotations, scales, the camera, lights, materials — blurs along its own curve, at
+    N renders' cost. The AOVs are the middle sub-frame's; stats gain `motion_samples`."""
+    import numpy as np
+
+    from .api import render
+    from .image import Image
+
+    n = scene.animation.motion_samples if scene.animation is not None else 1
+    shutter = tuple(scene.camera.shutter)
+    if n <= 1 or shutter[1] <= shutter[0]:
+        return render(scene_at(scene, t), progress=progress, solution=solution, **settings)
+    closed = scene.model_copy(update={"camera": scene.camera.model_copy(update={"shutter": (0.0, 0.0)})})
+    total, middle, rays, render_s = None, None, 0, 0.0
+    for i in range(n):
+        part = None if not callable(progress) else (lambda f, i=i: progress((i + f) / n))
+        image = render(scene_at(closed, t + shutter[0] + (i + 0.5) / n * (shutter[1] - shutter[0])),
+                       progress=part or False, solution=solution, **settings)
+        total = image.array.astype(np.float64) if total is None else total + image.array
+        rays += int(image.stats.get("rays", 0))
+        render_s += float(image.stats.get("render_s", 0.0))
+        if i == n // 2:
+            middle = image
+    stats = {**middle.stats, "rays": rays, "render_s": render_s, "motion_samples": n}
+    return Image((total / n).astype(np.float32), aovs=middle.aovs, stats=stats, exposure=middle.exposure)
+
+
 def render_frame(scene, frame: int, solution=None, progress=False, **settings) -> "Image":
     """Frame `frame` of the scene's animation: `lumos.render(scene_at(scene, frame / fps), **settings)`.
     `solution` (method radiosity): a Solution (or a saved one's path) to draw instead of solving; `progress` as
     `lumos.render`'s. The Image's
     stats gain `frame`, `time` (seconds) and `radiosity_solves` (the solves this frame took: 0 or 1)."""
-    from .api import render
-
     scene = _scene(scene)
     frame_indices(scene, [frame])
     t = frame_time(scene, frame)
-    image = render(scene_at(scene, t), progress=progress, solution=solution, **settings)
+    image = render_at(scene, t, progress=progress, solution=solution, **settings)
     solved = image.stats.get("method") == "radiosity" and solution is None
     image.stats.update(frame=frame, time=t, radiosity_solves=1 if solved else 0)
     return image
@@ -182,7 +210,7 @@ def render_frames(scene, frames=None, progress: bool | Callable[[float], None] =
     store = FrameStore(checkpoint, resume) if checkpoint is not None else None
     if client is not None or store is not None:
         return _frames_in_pieces(client, store, scene, indices, times, scenes, shared, solution, progress, settings)
-    return _frames(indices, times, scenes, shared, solution, progress, settings)
+    return _frames(scene, indices, times, scenes, shared, solution, progress, settings)
 
 
 def frame_piece(scene, frame: int, solution, settings: dict):
@@ -290,7 +318,7 @@ class FrameStore:
             return None
 
 
-def _frames(indices, times, scenes, shared, solution, progress, settings) -> Iterator["Image"]:
+def _frames(base, indices, times, scenes, shared, solution, progress, settings) -> Iterator["Image"]:
     """The generator of `render_frames`, once its input is checked."""
     from .api import render
     from .progress import make_progress
@@ -303,7 +331,10 @@ def _frames(indices, times, scenes, shared, solution, progress, settings) -> Ite
             given = solution
             if shared is not None:
                 given, solves = shared.get(frame_scene)
-            image = render(frame_scene, progress=part or False, solution=given, **settings)
+            if base.animation is not None and base.animation.motion_samples > 1:
+                image = render_at(base, t, progress=part or False, solution=given, **settings)
+            else:
+                image = render(frame_scene, progress=part or False, solution=given, **settings)
             if given is None and image.stats.get("method") == "radiosity":
                 solves = 1
             image.stats.update(frame=k, time=t, radiosity_solves=solves)

@@ -76,6 +76,10 @@ class Animation(StrictModel):
     fps: Positive = 24.0
     frames: Optional[Annotated[int, Field(ge=1)]] = None
     duration: Optional[Positive] = None
+    #: sub-frames over an open shutter: N > 1 renders each frame as the mean of N renders of the scene at times
+    #: spread over the shutter (`animate.render_at`), so every track blurs along its curve; 1: the chord of
+    #: translate tracks only (`scene.animation.scene_at`)
+    motion_samples: Annotated[int, Field(ge=1, le=256)] = 1
     tracks: list[Track] = Field(default_factory=list)
 
     @model_validator(mode="after")
