@@ -388,18 +388,7 @@ def run_render(args: argparse.Namespace, started: float) -> int:
 
         scene = scene_at(scene, 0.0)
     load_s = time.perf_counter() - t0
-    overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
-    overrides.update(_radiosity_overrides(args))
-    cfg = api.resolve_settings(scene, overrides)  # bad flags fail here, before anything is compiled
-    if args.solution is not None and cfg.method != "radiosity":
-        raise LumosError(f"--solution is a radiosity solution; method {cfg.method} does not draw one")
-    if args.mipmap is not None and cfg.method not in ("raster", "raycast", "whitted"):
-        raise LumosError(f"--no-mipmap is a setting of raster, raycast and whitted; method {cfg.method} does not "
-                         f"filter textures")
-    radiosity_given = _radiosity_overrides(args)
-    if radiosity_given and cfg.method != "radiosity":
-        flag = "--" + next(iter(radiosity_given["radiosity"])).replace("_", "-")
-        raise LumosError(f"{flag} is a radiosity setting; method {cfg.method} does not take it")
+    overrides, cfg = _render_settings(args, scene)  # bad flags fail here, before anything is compiled
     on_pass = None
     if args.checkpoint_every is not None:
         if cfg.method != "path":
@@ -498,7 +487,6 @@ def parse_frames(spec: str):
 def run_render_frames(args: argparse.Namespace, started: float) -> int:
     """`lumos render SCENE --frames A:B -o frames/f_%04d.png` (or `-o video.mp4`): the frames of the scene's
     animation, each written as it is rendered, or encoded into one video written whole at the end."""
-    from . import api
     from .animate import frame_indices
     from .io.image_files import SUPPORTED, check_output_path
     from .io.video import check_video_path
@@ -538,18 +526,7 @@ def run_render_frames(args: argparse.Namespace, started: float) -> int:
                              f"it, e.g. {Path(pattern).with_name(Path(pattern).stem + '_%04d' + Path(pattern).suffix)}")
         if Path(names[0]).suffix.lower() not in SUPPORTED:
             check_output_path(names[0])  # says which extensions there are
-    overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
-    overrides.update(_radiosity_overrides(args))
-    cfg = api.resolve_settings(scene, overrides)  # bad flags fail here, before anything is compiled
-    if args.solution is not None and cfg.method != "radiosity":
-        raise LumosError(f"--solution is a radiosity solution; method {cfg.method} does not draw one")
-    if args.mipmap is not None and cfg.method not in ("raster", "raycast", "whitted"):
-        raise LumosError(f"--no-mipmap is a setting of raster, raycast and whitted; method {cfg.method} does not "
-                         f"filter textures")
-    radiosity_given = _radiosity_overrides(args)
-    if radiosity_given and cfg.method != "radiosity":
-        flag = "--" + next(iter(radiosity_given["radiosity"])).replace("_", "-")
-        raise LumosError(f"{flag} is a radiosity setting; method {cfg.method} does not take it")
+    overrides, cfg = _render_settings(args, scene)  # bad flags fail here, before anything is compiled
     client, close = None, (lambda: None)
     if args.cluster:
         from .cluster import connect
@@ -604,6 +581,26 @@ def _write_frames(args, started, scene, load_s, frames, selection, pattern, vide
               f"{last.get('width')}x{last.get('height')}, {last.get('spp')} spp), {total_s:.2f} s (render "
               f"{stats['render_s']:.2f} s){solves} -> {pattern}", file=sys.stderr)
     return 0
+
+
+def _render_settings(args: argparse.Namespace, scene):
+    """The render flags given, as overrides of the scene's `render:` block, and the settings they resolve to;
+    refuses a flag the chosen method does not take."""
+    from . import api
+
+    overrides = {key: getattr(args, key) for key in SETTING_FLAGS if getattr(args, key) is not None}
+    overrides.update(_radiosity_overrides(args))
+    cfg = api.resolve_settings(scene, overrides)
+    if args.solution is not None and cfg.method != "radiosity":
+        raise LumosError(f"--solution is a radiosity solution; method {cfg.method} does not draw one")
+    if args.mipmap is not None and cfg.method not in ("raster", "raycast", "whitted"):
+        raise LumosError(f"--no-mipmap is a setting of raster, raycast and whitted; method {cfg.method} does not "
+                         f"filter textures")
+    radiosity_given = _radiosity_overrides(args)
+    if radiosity_given and cfg.method != "radiosity":
+        flag = "--" + next(iter(radiosity_given["radiosity"])).replace("_", "-")
+        raise LumosError(f"{flag} is a radiosity setting; method {cfg.method} does not take it")
+    return overrides, cfg
 
 
 def _checkpointer(out: Path, every: float):
