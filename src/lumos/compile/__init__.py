@@ -11,6 +11,7 @@ This package knows no rendering method. What a method needs beyond the flattened
 
 from __future__ import annotations
 
+import hashlib
 import time
 from dataclasses import dataclass, field
 from typing import Optional
@@ -48,6 +49,8 @@ class CompiledScene:
     triangle_order: Optional[np.ndarray] = None
     #: int32 (nt,): each BVH-ordered triangle's face index in its own mesh (what a ray query reports as prim_id)
     triangle_faces: Optional[np.ndarray] = None
+    #: the BVH as built, with the hash of the primitive bounds it was built over (`compile_scene(reuse=...)`)
+    bvh: Optional[tuple] = None
 
 
 class _Materials:
@@ -227,9 +230,10 @@ def spot_cos(degrees: float) -> float:
     return 0.0 if degrees == 90.0 else float(np.cos(np.radians(degrees)))
 
 
-def compile_scene(scene) -> CompiledScene:
+def compile_scene(scene, reuse: Optional[CompiledScene] = None) -> CompiledScene:
     """Flatten a validated `Scene` into `SceneArrays` (analytic shapes as themselves, meshes as triangles) and
-    build its BVH."""
+    build its BVH; with `reuse` (an earlier compile) its BVH is taken as it is when the primitives' bounds are
+    the same to the bit (an edit of materials or lights only: the live preview), and `bvh_build_s` is 0."""
     materials = _Materials()
     shapes = _Shapes(scene.camera.shutter)
     tri_parts = []  # (verts, normals, uvs, material, object)
@@ -258,7 +262,7 @@ def compile_scene(scene) -> CompiledScene:
     lights = _lights(scene, materials, emitters)
     for kind, m, mat, i in emitters:
         shapes.add(kind, m, mat, len(scene.objects) + i, light=i)
-    return _assemble(scene, materials, shapes, tri_parts, lights, names)
+    return _assemble(scene, materials, shapes, tri_parts, lights, names, reuse)
 
 
 def _ambient_and_background(scene, env_pixels: Optional[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -313,7 +317,7 @@ def compile_raster(scene, tessellation: int, shadows: bool) -> CompiledScene:
     return compiled
 
 
-def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledScene:
+def _assemble(scene, materials, shapes, tri_parts, lights, names, reuse=None) -> CompiledScene:
     light_kind, light_samples, light_vecs, light_scalars = lights
     tri_verts, tri_normals, tri_uvs, tri_info, tri_tangents = _concat_triangles(tri_parts)
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
@@ -340,9 +344,16 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         prim_bounds[:n_tri, 3:] = v.max(axis=1)
     for k, s in enumerate(bounded):
         prim_bounds[n_tri + k] = shapes.bounds[s]
-    t0 = time.perf_counter()
-    node_box, node_link, order, depth = build(prim_bounds, first_shape=n_tri)
-    build_s = time.perf_counter() - t0
+    key = hashlib.sha256(prim_bounds.tobytes() + str(n_tri).encode()).hexdigest()
+    if reuse is not None and reuse.bvh is not None and reuse.bvh[0] == key:
+        node_box, node_link, order, depth = (a.copy() if isinstance(a, np.ndarray) else a for a in reuse.bvh[1])
+        build_s = 0.0
+    else:
+        t0 = time.perf_counter()
+        node_box, node_link, order, depth = build(prim_bounds, first_shape=n_tri)
+        build_s = time.perf_counter() - t0
+    # the builder's output, kept for `reuse` (the packing below writes links into views of the node arrays)
+    built = (key, tuple(a.copy() if isinstance(a, np.ndarray) else a for a in (node_box, node_link, order, depth)))
     node_box, node_link = pack_nodes(node_box, node_link)
     wide_box, wide_link = wide_nodes(node_box, node_link)
 
@@ -407,7 +418,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names) -> CompiledSce
         bounds = np.zeros((2, 3))
     return CompiledScene(arrays, build_s, depth, n_tri, n_shape, bounds, names,
                          material_names=_material_names(scene, materials), triangle_order=tri_order,
-                         triangle_faces=tri_face, environment=env if environment is not None else None)
+                         triangle_faces=tri_face, environment=env if environment is not None else None,
+                         bvh=built)
 
 
 def _leaf_ordered(rows: np.ndarray, order: np.ndarray, tail: np.ndarray) -> np.ndarray:

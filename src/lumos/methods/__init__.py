@@ -5,16 +5,17 @@ scene it reads.
 """
 
 
-def compile_for(scene, settings, solved: bool = False):
+def compile_for(scene, settings, solved: bool = False, reuse=None):
     """`scene` compiled for `settings.method`: the flattened scene and its BVH (`compile.compile_scene`); for
     raster its polygons instead (`compile.compile_raster`); for path also the physical materials and the emitter
     table (`compile.emitters.attach`); for radiosity also the patches (`compile.patches.attach`), or with
-    `solved` (a saved solution will be drawn) only the digest that matches it (`compile.patches.attach_digest`)."""
+    `solved` (a saved solution will be drawn) only the digest that matches it (`compile.patches.attach_digest`).
+    `reuse`: an earlier compile whose BVH is kept where the geometry is the same (`compile.compile_scene`)."""
     from ..compile import compile_raster, compile_scene
 
     if settings.method == "raster":
         return compile_raster(scene, settings.tessellation, settings.shadows)
-    compiled = compile_scene(scene)
+    compiled = compile_scene(scene, reuse=reuse)
     if settings.method == "path":
         from ..compile import emitters
 

@@ -87,8 +87,10 @@ class Renderer:
 
     def _compile(self, key: str, scene, cfg):
         if self._compiled[0] != key:
+            # an edit of materials or lights keeps the BVH (compile_scene's `reuse`: same geometry, same bits)
+            previous = self._compiled[1] if cfg.method != "raster" else None
             self._compiled = (None, None)  # a failed compile leaves nothing stale behind
-            self._compiled = (key, compile_for(scene, cfg))
+            self._compiled = (key, compile_for(scene, cfg, reuse=previous))
             self.compiles += 1
         return self._compiled[1]
 
