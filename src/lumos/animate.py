@@ -269,53 +269,33 @@ def _frames_in_pieces(client, store, scene, indices, times, scenes, shared, solu
 
 
 class FrameStore:
-    """A checkpoint folder of finished frames: `frame-NNNNNN.npz` (the image, its AOVs, exposure and stats), each
-    written whole or not at all."""
+    """A checkpoint folder of finished frames: `frame-NNNNNN.npz` (the image, its AOVs, exposure and stats)."""
 
     def __init__(self, folder, resume: bool):
-        from pathlib import Path
+        from .cluster import PieceFolder
 
-        self.folder, self.resume = Path(folder), resume
-        if not resume and self.folder.exists() and any(self.folder.glob("frame-*.npz")):
-            raise LumosError(f"--checkpoint {self.folder}: holds frames of an earlier run; add --resume to go on "
-                             "with it, or give an empty folder")
-        try:
-            self.folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise LumosError(f"--checkpoint {self.folder}: {' '.join(str(exc).split())[:120]}") from None
-
-    def _file(self, frame: int):
-        return self.folder / f"frame-{frame:06d}.npz"
+        self.pieces = PieceFolder(folder, resume, "frame")
 
     def save(self, frame: int, image) -> None:
         import json
 
         import numpy as np
 
-        from .io.atomic import write_atomically
-
         arrays = {"array": image.array, "exposure": np.array(image.exposure),
                   "stats": np.array(json.dumps(image.stats, default=str))}
         arrays.update({f"aov_{k}": v for k, v in image.aovs.items()})
-        write_atomically(self._file(frame), lambda tmp: np.savez(tmp, **arrays), f"--checkpoint {self.folder}",
-                         suffix=".npz")
+        self.pieces.save_arrays((frame,), arrays)
 
     def load(self, frame: int):
         """The saved frame as {array, aovs, exposure, stats}, or None (not there, damaged, or not resuming)."""
         import json
 
-        import numpy as np
-
-        path = self._file(frame)
-        if not self.resume or not path.is_file():
+        data = self.pieces.load_arrays((frame,))
+        if data is None or "array" not in data:
             return None
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                return {"array": data["array"], "exposure": float(data["exposure"]),
-                        "stats": {**json.loads(str(data["stats"])), "resumed": True},
-                        "aovs": {k[4:]: data[k] for k in data.files if k.startswith("aov_")}}
-        except (OSError, ValueError, KeyError):
-            return None
+        return {"array": data["array"], "exposure": float(data["exposure"]),
+                "stats": {**json.loads(str(data["stats"])), "resumed": True},
+                "aovs": {k[4:]: v for k, v in data.items() if k.startswith("aov_")}}
 
 
 def _frames(base, indices, times, scenes, shared, solution, progress, settings) -> Iterator["Image"]:

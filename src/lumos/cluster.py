@@ -410,11 +410,47 @@ def _fingerprint(obj) -> str:
     return digest.hexdigest()
 
 
-class Checkpoint:
-    """A folder of finished pieces (`piece-<args>.npz`) and a manifest naming the render they belong to."""
+class PieceFolder:
+    """A checkpoint folder of finished pieces, `<kind>-<numbers>.npz` (named arrays, no pickles), each written whole
+    or not at all and read back only when resuming. A folder holding pieces of an earlier run is refused unless
+    resuming (a new run never writes over them)."""
+
+    def __init__(self, folder, resume: bool, kind: str):
+        self.folder, self.resume, self.kind = Path(folder), resume, kind
+        if not resume and self.folder.exists() and any(self.folder.glob(f"{kind}-*.npz")):
+            raise LumosError(f"--checkpoint {self.folder}: holds {kind}s of an earlier run; add --resume to go on "
+                             "with it, or give an empty folder")
+
+    def _file(self, numbers: tuple) -> Path:
+        return self.folder / (self.kind + "-" + "-".join(f"{a:06d}" for a in numbers) + ".npz")
+
+    def save_arrays(self, numbers: tuple, arrays: dict) -> None:
+        from .io.atomic import write_atomically
+
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise LumosError(f"--checkpoint {self.folder}: {' '.join(str(exc).split())[:120]}") from None
+        write_atomically(self._file(numbers), lambda tmp: np.savez(tmp, **arrays), f"--checkpoint {self.folder}",
+                         suffix=".npz")
+
+    def load_arrays(self, numbers: tuple) -> Optional[dict]:
+        """The saved piece's arrays, or None (not there, damaged — it is rendered again — or not resuming)."""
+        path = self._file(numbers)
+        if not self.resume or not path.is_file():
+            return None
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                return {k: data[k] for k in data.files}
+        except (OSError, ValueError, KeyError):
+            return None
+
+
+class Checkpoint(PieceFolder):
+    """The pieces of one render (`piece-<args>.npz`) and a manifest naming the render they belong to."""
 
     def __init__(self, folder: Path, resume: bool):
-        self.folder, self.resume = folder, resume
+        super().__init__(folder, resume, "piece")
 
     def open(self, fingerprint: str, layout: dict) -> dict:
         """Check (resume) or start the folder for this render; returns how to cut the render (`layout`: lists of
@@ -433,9 +469,6 @@ class Checkpoint:
                 raise LumosError(f"--resume: {self.folder} holds the pieces of another render (scene or settings "
                                  "differ); use a new --checkpoint folder")
             return saved["layout"]
-        if self.folder.exists() and any(self.folder.glob("piece-*.npz")):
-            raise LumosError(f"--checkpoint {self.folder}: holds pieces of an earlier run; add --resume to go on "
-                             "with it, or give an empty folder")
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
             manifest.write_text(json.dumps({"fingerprint": fingerprint, "layout": layout}))
@@ -443,26 +476,13 @@ class Checkpoint:
             raise LumosError(f"--checkpoint {self.folder}: {' '.join(str(exc).split())[:120]}") from None
         return layout
 
-    def _file(self, args: tuple) -> Path:
-        return self.folder / ("piece-" + "-".join(f"{a:06d}" for a in args) + ".npz")
-
     def save(self, args: tuple, result) -> None:
-        from .io.atomic import write_atomically
-
-        arrays = _to_arrays(result)
-        write_atomically(self._file(args), lambda tmp: np.savez(tmp, **arrays), f"--checkpoint {self.folder}",
-                         suffix=".npz")
+        self.save_arrays(args, _to_arrays(result))
 
     def load(self, args: tuple):
-        """The saved piece `args`, or None (not there, or not resuming)."""
-        path = self._file(args)
-        if not self.resume or not path.is_file():
-            return None
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                return _from_arrays({k: data[k] for k in data.files})
-        except (OSError, ValueError, KeyError):
-            return None  # a damaged piece is rendered again
+        """The saved piece `args`, or None (not there, damaged, or not resuming)."""
+        arrays = self.load_arrays(args)
+        return None if arrays is None else _from_arrays(arrays)
 
 
 def _to_arrays(result) -> dict:
