@@ -156,7 +156,7 @@ BAD_SCENES = [
     ("environment_and_background", "background: [0, 0, 1]\nenvironment: {color: 1}\n", 1,
      ["give background (one colour) or environment, not both"]),
     ("environment_neither", "environment: {scale: 2}\n", 1,
-     ["environment: give the environment a file (a lat-long image) or a color, one of them"]),
+     ["environment: give the environment one of a file (a lat-long image), a color or a sky"]),
     ("environment_missing_file", "environment:\n  file: nowhere.exr\n", 2,
      ["environment.file: no such image file 'nowhere.exr'"]),
     ("two_sided_not_bool", "objects:\n  - type: sphere\n    two_sided: maybe\n", 3,

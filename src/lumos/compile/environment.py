@@ -25,11 +25,15 @@ from ..kernels.layout import ENV_COS, ENV_ENTRY, ENV_HEIGHT, ENV_INFO_SIZE, ENV_
 
 
 def environment_image(env) -> np.ndarray:
-    """float32 (H, W, 3): the environment's radiance (its image read as linear values, or its colour as 1×1), times
-    its scale."""
+    """float32 (H, W, 3): the environment's radiance (its image read as linear values, its colour as 1×1, or its
+    sky tabulated by `compile.sky`), times its scale."""
     scale = np.asarray(env.scale, np.float32)
     if env.color is not None:
         return (np.asarray(env.color, np.float32) * scale).reshape(1, 1, 3)
+    if env.sky is not None:
+        from .sky import sky_image
+
+        return np.ascontiguousarray(sky_image(env.sky) * scale, np.float32)
     from ..io.image_files import read_image
 
     try:

@@ -162,6 +162,34 @@ Light = Annotated[
 LIGHT_TYPES = ("point", "spot", "directional", "area")
 
 
+class Sky(StrictModel):
+    """A daylight sky (Preetham's model, `compile.sky`): the sun at `elevation` degrees above the horizon and
+    `azimuth` degrees from −z towards +x (or towards `direction`), the haze `turbidity` (2 clear, 10 hazy), the
+    sun's disk drawn or not, a diffuse ground of albedo `ground` below the horizon, tabulated `resolution` pixels
+    wide. Scaled so that a white horizontal plane in the open shows radiance 1; the environment's `scale`
+    multiplies it."""
+
+    elevation: Annotated[float, Field(ge=0, le=90, allow_inf_nan=False)] = 45.0
+    azimuth: Annotated[float, Field(allow_inf_nan=False)] = 0.0
+    direction: Optional[Direction] = None
+    turbidity: Annotated[float, Field(ge=1.7, le=10, allow_inf_nan=False)] = 3.0
+    sun: bool = True
+    ground: Color = (0.2, 0.2, 0.2)
+    resolution: Annotated[int, Field(ge=16, le=16384)] = 1024
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.direction is not None:
+            if {"elevation", "azimuth"} & self.model_fields_set:
+                raise ValueError("give the sun a direction or an elevation and azimuth, not both")
+            if self.direction[1] < 0:
+                raise ValueError("the sun's direction points below the horizon (y < 0): Preetham's model describes "
+                                 "the sky by day only")
+        if self.resolution % 2:
+            raise ValueError("resolution must be even (the image is resolution × resolution/2)")
+        return self
+
+
 class Environment(StrictModel):
     """Light from every direction at infinity: a lat-long (equirectangular) image `file` (EXR, PFM, NPY: linear
     radiance; PNG, JPEG: sRGB, decoded) or a constant `color`, times `scale`, turned `rotation` degrees about +y
@@ -171,12 +199,13 @@ class Environment(StrictModel):
 
     file: Optional[str] = None
     color: Optional[Color] = None
+    sky: Optional[Sky] = None
     scale: Color = (1.0, 1.0, 1.0)
     rotation: Annotated[float, Field(allow_inf_nan=False)] = 0.0
     _path: Any = PrivateAttr(default=None)
 
     @model_validator(mode="after")
     def _check(self):
-        if (self.file is None) == (self.color is None):
-            raise ValueError("give the environment a file (a lat-long image) or a color, one of them")
+        if (self.file is not None) + (self.color is not None) + (self.sky is not None) != 1:
+            raise ValueError("give the environment one of a file (a lat-long image), a color or a sky")
         return self

@@ -65,6 +65,7 @@ from .lights import (
     Light,
     PointLight,
     RectLight,
+    Sky,
     SphereLight,
     SpotLight,
 )
@@ -105,6 +106,7 @@ __all__ = [
     "Scene",
     "Solid",
     "Sphere",
+    "Sky",
     "SphereLight",
     "SpotLight",
     "TERM_AOVS",
