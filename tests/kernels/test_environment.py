@@ -159,9 +159,9 @@ def test_the_ray_methods_see_the_environment_where_rays_leave(tmp_path, method):
 
 @pytest.mark.parametrize("method", ["raycast", "whitted", "raster"])
 def test_the_environment_is_the_classic_ambient_light_unless_one_is_given(method):
-    """Without an `ambient`, the classic methods' Ia is the environment's mean radiance: a sphere of ka 0.5 and
-    nothing else under a sky of 0.4 shows 0.2 (a white matte surface under a uniform sky L reflects L); a
-    scene's own ambient wins."""
+    """Without an `ambient`, the classic methods' Ia is the environment's irradiance over π: a sphere of ka 0.5
+    and nothing else under a uniform sky of 0.4 shows 0.2 (a white matte surface under a uniform sky L reflects
+    L); a scene's own ambient wins."""
     scene = {"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 20},
              "render": {"width": 9, "height": 9, "method": method},
              "environment": {"color": 0.4},
@@ -169,3 +169,50 @@ def test_the_environment_is_the_classic_ambient_light_unless_one_is_given(method
     np.testing.assert_allclose(lumos.render(scene).array[4, 4], 0.2, rtol=1e-5)
     scene["ambient"] = 0.1
     np.testing.assert_allclose(lumos.render(scene).array[4, 4], 0.05, rtol=1e-5)
+
+
+def test_the_ambient_of_an_environment_follows_the_normal():
+    """Ia(n) = E(n)/π in nine spherical harmonics: under a sky of radiance 1 above the horizon and 0 below,
+    E(n)/π = (1 + n_y)/2 in closed form (the visible part of the sky, cosine-weighted); the harmonics hold it to
+    a few parts in a thousand. Turning the environment turns Ia with it."""
+    from lumos.kernels.illumination import ambient_light
+
+    half = np.zeros((32, 64, 3), np.float32)
+    half[:16] = 1.0
+    half[:16, :32, 0] = 3.0  # red brighter in the image's left half (towards −x, unturned)
+    np.save("/tmp/lumos_test_half_sky.npy", half)
+    base = {"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0]}, "objects": [{"type": "sphere"}]}
+    rng = np.random.default_rng(5)
+    normals = rng.normal(size=(50, 3))
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    for rotation in (0.0, 90.0):
+        scene = dict(base, environment={"file": "/tmp/lumos_test_half_sky.npy", "rotation": rotation})
+        amb = compile_scene(lumos.load_scene(scene)).arrays.ambient
+        for n in normals:
+            got = np.array(ambient_light(amb, n))
+            assert got[1] == pytest.approx((1 + n[1]) / 2, abs=5e-3), n
+            assert got[2] == pytest.approx((1 + n[1]) / 2, abs=5e-3), n
+        # the bright red half faces −x unturned, and +z turned by 90° (as the middle column goes from −z to −x)
+        toward = np.array([-1.0, 0.0, 0.0]) if rotation == 0 else np.array([0.0, 0.0, 1.0])
+        assert ambient_light(amb, toward)[0] > ambient_light(amb, -toward)[0] + 0.5
+
+
+@pytest.mark.parametrize("method", ["raycast", "whitted", "raster"])
+def test_a_sphere_under_half_a_sky_is_lit_from_above_by_every_classic_method(method):
+    """Each classic method's ambient term reads Ia by the shading normal: a sphere of ka 1 (nothing else) under
+    the half sky above, seen along −z by an orthographic camera, shows (1 + n_y)/2 at each pixel."""
+    half = np.zeros((32, 64, 3), np.float32)
+    half[:16] = 1.0
+    np.save("/tmp/lumos_test_half_sky2.npy", half)
+    scene = {"camera": {"type": "orthographic", "position": [0, 0, 4], "look_at": [0, 0, 0], "size": 2.2},
+             "render": {"width": 33, "height": 33, "method": method, "shading": "phong"},
+             "environment": {"file": "/tmp/lumos_test_half_sky2.npy"},
+             "objects": [{"type": "sphere", "material": {"ka": 1.0, "kd": 0.0}}]}
+    if method != "raster":
+        del scene["render"]["shading"]
+    img = lumos.render(scene, aov=["object_id"])
+    inside = interior_of(img.aovs["object_id"])
+    ys = (16 - np.arange(33))[:, None] * (2.2 / 33)  # pixel centres' y (rows go down)
+    expected = np.broadcast_to((1 + np.clip(ys, -1, 1)) / 2, (33, 33))
+    # raster's sphere is tessellated: its interpolated normals are off by a little near the rim
+    np.testing.assert_allclose(img.array[inside][:, 1], expected[inside], atol=0.03 if method == "raster" else 5e-3)

@@ -265,19 +265,24 @@ def compile_scene(scene, reuse: Optional[CompiledScene] = None) -> CompiledScene
     return _assemble(scene, materials, shapes, tri_parts, lights, names, reuse)
 
 
-def _ambient_and_background(scene, env_pixels: Optional[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Ia and what rays that miss see where the environment is not looked up: the scene's `ambient` and
-    `background`, or, with an environment (its `env_pixels`), its mean radiance for both (for Ia only where the
-    scene gives no `ambient`: a white diffuse surface under a uniform sky L reflects L, the classic Ka·Ia made
-    physical)."""
-    ambient = np.array(scene.ambient, dtype=np.float64)
+def _ambient_and_background(scene, env_pixels: Optional[np.ndarray],
+                            rotation: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Ia (`layout.AMBIENT_ROWS` rows) and what rays that miss see where the environment is not looked up: the
+    scene's `ambient` and `background`; with an environment (its `env_pixels`, turned `rotation` degrees), its
+    mean radiance for the background, and for Ia, where the scene gives no `ambient`, its irradiance over π by the
+    surface's normal: a white diffuse surface (ka 1) under a uniform sky L shows L, under a sky with a sun it is
+    brighter on the side that faces the sun, the classic Ka·Ia made physical."""
+    ambient = np.zeros((L.AMBIENT_ROWS, 3))
+    ambient[0] = scene.ambient
     background = np.array(scene.background, dtype=np.float64)
     if env_pixels is None:
         return ambient, background
-    from .environment import mean_radiance
+    from .environment import irradiance_sh, mean_radiance
 
-    mean = mean_radiance(env_pixels)
-    return (ambient if "ambient" in getattr(scene, "model_fields_set", ()) else mean), mean
+    if "ambient" not in getattr(scene, "model_fields_set", ()):
+        ambient[0] = 0.0
+        ambient[1:] = irradiance_sh(env_pixels, rotation)
+    return ambient, mean_radiance(env_pixels)
 
 
 def _material_names(scene, materials: _Materials) -> list[str]:
@@ -370,7 +375,8 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, reuse=None) ->
 
     environment = getattr(scene, "environment", None)
     env = environment_arrays(environment)  # read once: the ray methods' misses and path's light sampling use it
-    ambient, background = _ambient_and_background(scene, env[0] if environment is not None else None)
+    ambient, background = _ambient_and_background(scene, env[0] if environment is not None else None,
+                                                  environment.rotation if environment is not None else 0.0)
     material_rows = materials.array()
     if n_shape:
         shape_mats = material_rows[shape_info[:, L.INFO_MATERIAL]]

@@ -56,6 +56,32 @@ def mean_radiance(image: np.ndarray) -> np.ndarray:
     return (image.astype(np.float64) * w[:, None, None]).sum(axis=(0, 1)) / (w.sum() * image.shape[1])
 
 
+def irradiance_sh(pixels: np.ndarray, rotation: float = 0.0) -> np.ndarray:
+    """(9, 3): the irradiance over π, E(n)/π, of a lat-long radiance image turned `rotation` degrees about +y, as
+    coefficients of `kernels.illumination.sh9` (Ramamoorthi & Hanrahan 2001, "An Efficient Representation for
+    Irradiance Environment Maps"): the radiance's projection on bands 0-2, each band l scaled by Â_l/π = 1, 2/3,
+    1/4 (the clamped cosine's own coefficients), so that a uniform radiance L gives E/π = L everywhere."""
+    from ..kernels.illumination import sh9
+
+    # pixels are constant over their area: a small image is integrated over a finer grid of its own pixels (the
+    # midpoint rule per row is then exact to about 1e-5 for the harmonics' polar parts)
+    pixels = np.repeat(np.repeat(pixels, -(-256 // pixels.shape[0]), axis=0), -(-512 // pixels.shape[1]), axis=1)
+    h, w = pixels.shape[:2]
+    phi = ((np.arange(w) + 0.5) / w - 0.5) * 2.0 * np.pi
+    a = np.radians(rotation)
+    edges = np.cos(np.arange(h + 1) / h * np.pi)
+    coefficients = np.zeros((9, 3))
+    for i0 in range(0, h, 64):  # a block of rows at a time: (9, rows, w) stays small for a large image
+        rows = np.arange(i0, min(i0 + 64, h))
+        theta = (rows + 0.5) / h * np.pi
+        st, y = np.sin(theta)[:, None], np.broadcast_to(np.cos(theta)[:, None], (rows.size, w))
+        xi, zi = st * np.sin(phi)[None, :], -st * np.cos(phi)[None, :]  # the image's own frame
+        x, z = np.cos(a) * xi + np.sin(a) * zi, -np.sin(a) * xi + np.cos(a) * zi  # turned into the world
+        omega = ((edges[rows] - edges[rows + 1]) * 2.0 * np.pi / w)[:, None]  # each pixel's solid angle
+        coefficients += np.einsum("khw,hwc->kc", sh9(x, y, z) * omega, pixels[rows].astype(np.float64))
+    return coefficients * np.array([1.0] + [2.0 / 3.0] * 3 + [0.25] * 5)[:, None]
+
+
 def environment_arrays(env) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The arrays of a scene-model Environment (`image_arrays` of its image and rotation); an empty 1×1 black
     environment when `env` is None."""

@@ -224,6 +224,40 @@ def illuminate(lit, geo, surf, p, n, n_geo, V, mat_id, seed, pixel, sample, shad
                              shadows, stack, stack_t, time)
 
 
+# Real spherical harmonics of bands 0-2 (the constants of Ramamoorthi & Hanrahan 2001), in the order of `sh9`
+_SH0 = 0.28209479177387814  # 1/(2·sqrt(π))
+_SH1 = 0.4886025119029199  # sqrt(3/(4π))
+_SH2 = 1.0925484305920792  # sqrt(15/(4π))
+_SH20 = 0.31539156525252005  # sqrt(5/(16π))
+_SH22 = 0.5462742152960396  # sqrt(15/(16π))
+
+
+def sh9(x, y, z):
+    """The nine basis functions at unit direction(s) (x, y, z): NumPy arrays of any shape (stacked first), for
+    `compile.environment.irradiance_sh`; `ambient_light` evaluates the same in the kernels."""
+    import numpy as np
+
+    one = np.ones_like(x)
+    return np.stack([_SH0 * one, _SH1 * y, _SH1 * z, _SH1 * x, _SH2 * x * y, _SH2 * y * z,
+                     _SH20 * (3.0 * z * z - 1.0), _SH2 * x * z, _SH22 * (x * x - y * y)])
+
+
+@njit
+def ambient_light(amb, n):
+    """Ia at a surface of unit normal n (`layout.AMBIENT_ROWS`): the constant row 0 plus the environment's
+    irradiance over π in the spherical harmonics of rows 1-9, never negative (nine terms of a sun ring a little
+    on its far side)."""
+    x, y, z = n[0], n[1], n[2]
+    basis = (_SH0, _SH1 * y, _SH1 * z, _SH1 * x, _SH2 * x * y, _SH2 * y * z, _SH20 * (3.0 * z * z - 1.0), _SH2 * x * z,
+             _SH22 * (x * x - y * y))
+    r, g, b = amb[0, 0], amb[0, 1], amb[0, 2]
+    for k in range(9):
+        r += amb[k + 1, 0] * basis[k]
+        g += amb[k + 1, 1] * basis[k]
+        b += amb[k + 1, 2] * basis[k]
+    return max(r, 0.0), max(g, 0.0), max(b, 0.0)
+
+
 @njit_inline
 def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack,
                       stack_t, time):
@@ -254,8 +288,8 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
         for j in range(lit.light_kind.shape[0]):
             for c in range(PER_LIGHT_SIZE):
                 per_light[log_base + j, c] = 0.0
-    amb = lit.ambient
-    ambient = (ka[0] * amb[0], ka[1] * amb[1], ka[2] * amb[2])
+    ia = ambient_light(lit.ambient, n)
+    ambient = (ka[0] * ia[0], ka[1] * ia[1], ka[2] * ia[2])
     dr = dg = db = 0.0
     sr = sg = sb = 0.0
     rays = 0

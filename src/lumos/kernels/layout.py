@@ -67,6 +67,11 @@ MODEL_CLASSIC = 0  # kd, ks/shininess, kr, kt read as kernels.bsdf says
 MODEL_CONDUCTOR = 1  # a metal: GGX microfacets (a mirror when α = 0) with the Fresnel factor of η + ik
 MODEL_PLASTIC = 2  # kd under a dielectric coat of index MAT_ETA: GGX microfacets (a mirror when α = 0)
 
+# The ambient light Ia (SceneArrays.ambient): a constant (row 0) plus, with an environment and no `ambient` given,
+# its irradiance E(n)/π in the nine real spherical harmonics of bands 0-2 (Ramamoorthi & Hanrahan 2001: the
+# clamped cosine keeps l <= 2 to within a few per cent)
+AMBIENT_ROWS = 10
+
 # Light kinds and columns. Kinds up to LIGHT_DIRECTIONAL are delta lights (one direction per shading point, no
 # random samples); the kinds above them are area lights.
 LIGHT_POINT = 0
@@ -173,7 +178,8 @@ SceneArrays = namedtuple(
         "light_samples",  # int32 (nl,)
         "light_vecs",  # float64 (nl, 6, 3)
         "light_scalars",  # float64 (nl, LS_SIZE)
-        "ambient",  # float64 (3,)
+        "ambient",  # float64 (AMBIENT_ROWS, 3): Ia(n) = row 0 + Σ_k row k · Y_k(n), the rows 1-9 the irradiance over
+        # π of the environment in real spherical harmonics up to l = 2 (`illumination.ambient_light`); 0 without one
         "background",  # float64 (3,)
         "env_pixels",  # float32 (H, W, 3): the environment's lat-long radiance (1×1 black without one)
         "env_info",  # float64 (ENV_INFO_SIZE,): present, rotation, size (compile.environment)

@@ -26,7 +26,7 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels import raster as R
-from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
+from ..kernels.illumination import PER_LIGHT_SIZE, ambient_light, illuminate_terms
 from ..kernels.jit import njit, njit_inline, njit_serial
 from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, MAT_BUMP, MAT_CUTOUT, MAT_EMISSION,
                               MAT_KA, MAT_KD, MAT_KS, MAT_ONE_SIDED, MAT_SHININESS, MAT_SIZE, MAT_TEXTURE,
@@ -274,7 +274,8 @@ def _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_ter
                            + gbuf[y, x, G_NORMAL + 2] * fn[2])
                     back = (fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] < 0.0) != (raw < 0.0)
                     c = light_at + 6 if back else light_at
-                    a = (ka[0] * amb[0], ka[1] * amb[1], ka[2] * amb[2])
+                    ia = ambient_light(amb, n_sh)
+                    a = (ka[0] * ia[0], ka[1] * ia[1], ka[2] * ia[2])
                     d = (kd[0] * np.float64(gbuf[y, x, c]), kd[1] * np.float64(gbuf[y, x, c + 1]),
                          kd[2] * np.float64(gbuf[y, x, c + 2]))
                     sp = (ks[0] * np.float64(gbuf[y, x, c + 3]), ks[1] * np.float64(gbuf[y, x, c + 4]),
