@@ -7,9 +7,9 @@ import pytest
 from helpers import interior_of
 
 import lumos
+from lumos.mesh.directions import lat_long_directions
 from lumos.compile.sky import (
     SUN_RADIUS_DEG,
-    lat_long_directions,
     rgb_from_xyY,
     sky_image,
     sky_luminance_unit,

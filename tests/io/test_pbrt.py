@@ -298,6 +298,69 @@ def test_infinite_light_is_the_background(tmp_path):
     assert data["environment"]["color"] == pytest.approx([1.4, 1.6, 1.8]) and lines[("environment",)] == 6
 
 
+def _cap_map(n=64, cos_cap=0.8, bright=5.0, dim=0.1):
+    """An equal-area map of radiance `bright` within the cap cos θ > cos_cap about the map's +z, `dim` elsewhere."""
+    from lumos.mesh.directions import equal_area_square_to_sphere
+
+    u, v = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(n) + 0.5) / n)
+    z = equal_area_square_to_sphere(u, v)[..., 2]
+    return np.repeat(np.where(z > cos_cap, bright, dim)[..., None], 3, axis=2).astype(np.float32)
+
+
+def _lat_long_solid_angles(h, w):
+    edges = np.cos(np.arange(h + 1) / h * np.pi)
+    return np.broadcast_to(((edges[:-1] - edges[1:]) * 2 * np.pi / w)[:, None], (h, w))
+
+
+def test_an_equal_area_environment_map_becomes_the_lat_long_environment(tmp_path):
+    """pbrt-v4's image infinite light (an equal-area octahedral square) is resampled into lumos's lat-long image
+    through the light's transform: a bright cap about the map's +z lands where a distant light placed by the same
+    transform comes from, and the light it sends (the mean over the sphere) is kept."""
+    from lumos.mesh.directions import lat_long_directions
+
+    cap = _cap_map()
+    np.save(tmp_path / "cap.npy", cap)
+    data, lines, said = read(tmp_path, 'AttributeBegin\nRotate 70 1 0.3 0\n'
+                             'LightSource "infinite" "string filename" "cap.npy"\n'
+                             'LightSource "distant" "point3 from" [0 0 1] "point3 to" [0 0 0]\nAttributeEnd\n'
+                             'Shape "sphere"\n')
+    assert not any("infinite" in m for m in said), said
+    image = np.load(data["environment"]["file"])
+    h, w = image.shape[:2]
+    assert (h, w) == (64, 128) and lines[("environment",)] == 7
+    axis = -np.asarray(data["lights"][0]["direction"], float)  # towards the distant light: the map's +z
+    axis /= np.linalg.norm(axis)
+    cos = lat_long_directions(h, w) @ axis
+    assert (image[cos > 0.83] == 5.0).mean() > 0.98 and (image[cos < 0.77] == 0.1).mean() > 0.98
+    omega = _lat_long_solid_angles(h, w)
+    mean_sphere = (image[..., 1] * omega).sum() / (4 * np.pi)
+    assert mean_sphere == pytest.approx(cap[..., 1].mean(), rel=0.01)  # (equal-area: the mean over pixels)
+
+
+def test_illuminance_scales_an_environment_map_as_pbrt_does(tmp_path):
+    """`illuminance` E: the map is scaled so that a surface facing its +z receives E (pbrt-v4), plus a constant
+    infinite light added on top."""
+    from lumos.mesh.directions import lat_long_directions
+
+    np.save(tmp_path / "cap.npy", _cap_map())
+    data, _, _ = read(tmp_path, 'LightSource "infinite" "string filename" "cap.npy" "float illuminance" 3\n'
+                      'LightSource "distant" "point3 from" [0 0 1] "point3 to" [0 0 0]\n'
+                      'LightSource "infinite" "rgb L" [0.5 0.5 0.5]\nShape "sphere"\n')
+    image = np.load(data["environment"]["file"]).astype(float)
+    axis = -np.asarray(data["lights"][0]["direction"], float)
+    axis /= np.linalg.norm(axis)
+    h, w = image.shape[:2]
+    cos = np.maximum(lat_long_directions(h, w) @ axis, 0)
+    e = ((image[..., 1] - 0.5) * cos * _lat_long_solid_angles(h, w)).sum()
+    assert e == pytest.approx(3.0, rel=0.02)
+
+
+def test_a_map_that_is_not_square_is_refused_in_one_line(tmp_path):
+    np.save(tmp_path / "wide.npy", np.ones((8, 16, 3), np.float32))
+    message = error_of(tmp_path, HEADER + 'LightSource "infinite" "string filename" "wide.npy"\nShape "sphere"\n')
+    assert "16x8" in message and "square" in message and "\n" not in message
+
+
 def test_shapes(tmp_path):
     import gzip
     import shutil

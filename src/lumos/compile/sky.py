@@ -31,6 +31,8 @@ import math
 
 import numpy as np
 
+from ..mesh.directions import lat_long_directions
+
 #: Perez coefficients (A, B, C, D, E) as (slope, intercept) in the turbidity, for Y, x and y (the paper's appendix)
 _PEREZ_Y = ((0.1787, -1.4630), (-0.3554, 0.4275), (-0.0227, 5.3251), (0.1206, -2.5771), (-0.0670, 0.3703))
 _PEREZ_X = ((-0.0193, -0.2592), (-0.0665, 0.0008), (-0.0004, 0.2125), (-0.0641, -0.8989), (-0.0033, 0.0452))
@@ -114,15 +116,6 @@ def sun_direction(sky) -> np.ndarray:
         return d / np.linalg.norm(d)
     el, az = math.radians(sky.elevation), math.radians(sky.azimuth)
     return np.array([math.cos(el) * math.sin(az), math.sin(el), -math.cos(el) * math.cos(az)])
-
-
-def lat_long_directions(height: int, width: int) -> np.ndarray:
-    """(H, W, 3) the unit direction at each pixel's centre, by the environment's mapping (u = 1/2 +
-    atan2(x, −z)/2π, v = acos(y)/π)."""
-    theta = (np.arange(height) + 0.5) / height * np.pi
-    phi = ((np.arange(width) + 0.5) / width - 0.5) * 2.0 * np.pi
-    st, ct = np.sin(theta)[:, None], np.cos(theta)[:, None]
-    return np.stack(np.broadcast_arrays(st * np.sin(phi)[None, :], ct, -st * np.cos(phi)[None, :]), axis=-1)
 
 
 def _pixel_solid_angles(height: int, width: int) -> np.ndarray:

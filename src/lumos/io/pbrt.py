@@ -26,7 +26,7 @@ from typing import Optional
 import numpy as np
 
 from ..errors import LumosError
-from .pbrt_lights import light_items
+from .pbrt_lights import EnvironmentMap, lat_long_environment, light_items
 from .pbrt_materials import DEFAULT_MATERIAL, MaterialSpec, lumos_material
 from .pbrt_options import Option, Options, camera_dict, render_dict, resolution, world_mirror
 from .pbrt_shapes import Emission, ShapeRecord, shape_items
@@ -330,16 +330,25 @@ class _Reader:
         data: dict = {"camera": camera_dict(self.options, mirror, width, height, ctx),
                       "render": render_dict(self.options, ctx)}
         materials = self._materials()
-        lights, background = [], np.zeros(3)
+        lights, background, maps = [], np.zeros(3), []
         for kind, ps, ctm, where, line in self.lights:
             items, sky = light_items(kind, ps, mirror @ ctm, ctx, where)
             for light in items:
                 lines[("lights", len(lights))] = line
                 lights.append(light)
-            if sky is not None:
+            if isinstance(sky, EnvironmentMap):
+                maps.append(sky)
+                lines[("environment",)] = line
+            elif sky is not None:
                 background += sky
                 lines[("environment",)] = line
-        if background.any():
+        if maps:  # the maps (and any constant sky) as one lat-long image, in the importers' cache folder
+            from .gltf_materials import cache_folder
+
+            out = cache_folder() / f"pbrt-infinite-{len(list(cache_folder().glob('pbrt-infinite-*')))}.npy"
+            np.save(out, lat_long_environment(maps, background))
+            data["environment"] = {"file": str(out)}
+        elif background.any():
             data["environment"] = {"color": [float(c) for c in background]}  # path samples it as a light
         objects: list = []
         variants = _Variants(materials)

@@ -14,8 +14,10 @@ distant illuminance, infinite illuminance/π.
 - `spot` (I, from, to, coneangle θ₀, conedeltaangle δ): `spot`, intensity I/π, direction to − from, angle θ₀,
   inner_angle θ₀ − δ (between them lumos eases with s², pbrt with a smoothstep).
 - `distant` (L, from, to): `directional`, intensity L/π, direction to − from.
-- `infinite` (L): the scene's `background` (what escaping rays see and are lit by); with `filename`, the image's
-  mean radiance (pbrt's maps are equal-area: the mean over pixels is the mean over directions), with a warning.
+- `infinite` (L): the scene's `environment` of that colour; with `filename`, pbrt-v4's equal-area octahedral
+  map (square) resampled into lumos's lat-long image (`lat_long_environment`) through the light's transform,
+  `illuminance` scaling it as pbrt does (the illuminance on a surface facing the light's +z). Several infinite
+  lights add up into one environment.
 - `goniometric`, `projection`: a `point` light of the same I, with a warning.
 """
 
@@ -26,7 +28,8 @@ from typing import Optional
 
 import numpy as np
 
-from .pbrt_textures import Context, Tex, color, grey, tidy
+from ..mesh.directions import equal_area_sphere_to_square, equal_area_square_to_sphere, lat_long_directions
+from .pbrt_textures import Context, Tex, color, tidy
 from .pbrt_tokens import Params, Where
 
 _WHITE = Tex((1.0, 1.0, 1.0))
@@ -46,7 +49,7 @@ def _rgb(tex: Tex, factor: float) -> list:
 
 
 def light_items(kind: str, ps: Params, world: np.ndarray, ctx: Context, where: Where
-                ) -> tuple[list[dict], Optional[tuple]]:
+                ) -> tuple[list[dict], "Optional[tuple | EnvironmentMap]"]:
     """The lumos lights of one LightSource, and the radiance it adds to the background (infinite lights)."""
     scale = ps.float("scale", 1.0)
     if kind in ("point", "goniometric", "projection"):
@@ -70,7 +73,7 @@ def light_items(kind: str, ps: Params, world: np.ndarray, ctx: Context, where: W
         return [{"type": "directional", "direction": _vector(world, direction),
                  "intensity": _rgb(color(ps, "L", "illuminant", ctx, _WHITE), factor)}], None
     if kind == "infinite":
-        return [], _infinite(ps, ctx, where, scale)
+        return [], _infinite(ps, ctx, where, scale, world)
     ctx.warn.once(("light", kind), where, f"LightSource '{kind}' is unknown: left out")
     ps.ignore(*ps.params)
     return [], None
@@ -97,15 +100,16 @@ def _spot(ps: Params, world: np.ndarray, ctx: Context, where: Where, scale: floa
             "intensity": _rgb(color(ps, "I", "illuminant", ctx, _WHITE), factor)}
 
 
-def _infinite(ps: Params, ctx: Context, where: Where, scale: float) -> tuple:
+def _infinite(ps: Params, ctx: Context, where: Where, scale: float, world: np.ndarray):
+    """An infinite light: its radiance as an RGB tuple (`L`), or an `EnvironmentMap` (`filename`)."""
     illuminance = ps.float("illuminance", -1.0)
-    factor = scale * (illuminance / math.pi if illuminance > 0 else 1.0)
     filename = ps.string("filename", None)
     if ps.get("portal") is not None:
         ctx.warn.once(("portal",), where, "LightSource 'infinite': \"portal\" is not read (the whole sky lights)")
     if filename and ps.has("L"):
         raise where.error("LightSource 'infinite': both \"L\" and \"filename\" given")
     if not filename:
+        factor = scale * (illuminance / math.pi if illuminance > 0 else 1.0)
         return tuple(_rgb(color(ps, "L", "illuminant", ctx, _WHITE), factor))
     path = ctx.folder / filename
     if not path.is_file():
@@ -113,10 +117,47 @@ def _infinite(ps: Params, ctx: Context, where: Where, scale: float) -> tuple:
     from .image_files import read_image
 
     try:
-        mean = tuple(float(c) for c in read_image(path).reshape(-1, 3).mean(axis=0))
-        stand_in = f"its mean radiance ({', '.join(f'{c:.3g}' for c in mean)})"
-    except Exception:  # noqa: BLE001 - an image lumos cannot decode stands in as black
-        mean, stand_in = grey(0.0), "black"
-    ctx.warn.once(("envmap",), where, f"LightSource 'infinite' with an image ('{filename}'): environment maps are not "
-                  f"supported yet; a uniform sky of {stand_in} stands in")
-    return tuple(tidy(c * factor) for c in mean)
+        image = read_image(path).astype(np.float64)
+    except Exception as exc:  # noqa: BLE001 - a map that cannot be read is bad input, said in one line
+        raise where.error(f"LightSource 'infinite': {exc}") from None
+    if image.shape[0] != image.shape[1]:
+        raise where.error(f"LightSource 'infinite': '{filename}' is {image.shape[1]}x{image.shape[0]}: pbrt-v4's "
+                          "environment maps are square (equal-area octahedral)")
+    factor = scale
+    if illuminance > 0:  # scaled so that a surface facing the light's +z receives this illuminance (pbrt-v4)
+        n = image.shape[0]
+        u, v = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(n) + 0.5) / n)
+        up = np.maximum(equal_area_square_to_sphere(u, v)[..., 2], 0.0)
+        k = float((image @ _LUMINANCE * up).sum() * 4.0 * math.pi / (n * n))
+        factor *= illuminance / k if k > 0 else 0.0
+    return EnvironmentMap(image * factor, np.asarray(world, float)[:3, :3])
+
+
+#: the luminance of a linear sRGB triple
+_LUMINANCE = np.array([0.2126729, 0.7151522, 0.0721750])
+
+
+class EnvironmentMap:
+    """One image infinite light: its equal-area octahedral radiance (N, N, 3) and the 3×3 linear part of its
+    light-to-world transform."""
+
+    def __init__(self, image: np.ndarray, to_world: np.ndarray):
+        self.image, self.to_world = image, to_world
+
+
+def lat_long_environment(maps: list[EnvironmentMap], constant) -> np.ndarray:
+    """float32 (N, 2N, 3): lumos's lat-long environment of the image infinite lights `maps` (N the largest map's
+    side) plus a constant radiance: each lat-long pixel takes the mean of 2×2 points, each read at the nearest
+    pixel of each map (as pbrt-v4's `ImageLe` reads it) along the direction turned back into the map's frame."""
+    n = max(m.image.shape[0] for m in maps)
+    sub = lat_long_directions(2 * n, 4 * n)  # 2×2 points per pixel of the (n, 2n) image
+    out = np.zeros((2 * n, 4 * n, 3)) + np.asarray(constant, float)
+    for m in maps:
+        d = sub @ np.linalg.inv(m.to_world).T  # world -> the map's own frame
+        d /= np.linalg.norm(d, axis=-1)[..., None]
+        u, v = equal_area_sphere_to_square(d)
+        side = m.image.shape[0]
+        rows = np.clip((v * side).astype(np.int64), 0, side - 1)
+        cols = np.clip((u * side).astype(np.int64), 0, side - 1)
+        out += m.image[rows, cols]
+    return out.reshape(n, 2, 2 * n, 2, 3).mean(axis=(1, 3)).astype(np.float32)
