@@ -250,5 +250,8 @@ PatchArrays = namedtuple(
         "poly_normal",  # float64 (npoly, 3): unit normal of each polygon's front side
     ],
 )
+#: The environment as a light to gather from (`kernels.environment`'s env_* functions read these fields of
+#: `Emitters` or of this): radiosity's sky light (`kernels.radiosity.sky_light`).
+EnvironmentTable = namedtuple("EnvironmentTable", ["env_pixels", "env_marginal", "env_conditional", "env_info"])
 #: What texture lookups read (kernels.texture).
 Textures = namedtuple("Textures", ["tex_info", "tex_pixels", "tri_tangents"])

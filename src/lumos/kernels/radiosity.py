@@ -19,6 +19,8 @@ from .. import config
 from .formfactor import patch_ff, polygon_point, visibility
 from .hemicube import hemicube_form_factors
 from .camera import camera_ray
+from .bsdf import sample_cosine
+from .environment import env_pdf, env_radiance, env_sample
 from .illumination import sample_light
 from .optics import reflect, refract, schlick
 from .jit import njit, njit_alloc, njit_inline, njit_serial
@@ -30,6 +32,7 @@ from .traverse import any_hit, closest_hit
 from .views import geometry_of, lighting_of
 
 _CHUNK = 256
+_SKY_STREAM = 1 << 30  # sample_key's stream for the sky's rays (the lights' streams are their indices)
 #: A receiver's point is lifted this far (relative) off its patch before its shadow rays leave.
 _LIFT = config.RAY_EPSILON
 
@@ -54,6 +57,58 @@ def direct_light(sa, lights_sa, pa, samples, seed, out, rays_out, c0, c1):
     Chunks c0 … c1−1 of _CHUNK patches (`threads.parallel_for`); rays_out[c]: chunk c's shadow rays."""
     stack, stack_t, scratch = _scratch()
     _direct_chunks(sa, lights_sa, pa, samples, seed, out, rays_out, c0, c1, stack, stack_t, scratch)
+
+
+@njit_serial
+def sky_light(sa, sky, pa, samples, seed, out, rays_out, c0, c1):
+    """out (n, 3) += ρ·E/π of the environment (`sky`: a `layout.EnvironmentTable`), E = ∫ L·cos θ dω over what
+    each patch sees of it: at `samples` stratified points of the patch, two directions, one drawn in proportion to
+    the environment's radiance (`environment.env_sample`: a sun), one cosine-weighted (a wide sky), combined by
+    the balance heuristic (each sample weighs L·cos θ/(p_env + cos θ/π)), with a shadow ray to infinity each.
+    Chunks c0 … c1−1 of _CHUNK patches; rays_out[c]: chunk c's shadow rays."""
+    stack, stack_t, scratch = _scratch()
+    _sky_chunks(sa, sky, pa, samples, seed, out, rays_out, c0, c1, stack)
+
+
+@njit
+def _sky_chunks(sa, sky, pa, samples, seed, out, rays_out, c0, c1, stack):
+    n = pa.area.shape[0]
+    geo = geometry_of(sa)
+    for c in range(c0, c1):
+        rays = 0
+        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
+            rho = pa.rho[i]
+            if rho[0] <= 0.0 and rho[1] <= 0.0 and rho[2] <= 0.0:
+                continue
+            nrm = (pa.normal[i, 0], pa.normal[i, 1], pa.normal[i, 2])
+            key = sample_key(seed, i, _SKY_STREAM)
+            r = g = b = 0.0
+            for s in range(samples):
+                u1, u2 = rand2_key(key, 3 * s)
+                u, v = stratified_2d(s, samples, u1, u2)
+                p = polygon_point(pa.corners[i], pa.k[i], u, v)
+                for strategy in range(2):
+                    u3, u4 = rand2_key(key, 3 * s + 1 + strategy)
+                    if strategy == 0:
+                        d, pdf = env_sample(sky, u3, u4)
+                    else:
+                        d = sample_cosine(nrm, u3, u4)
+                        pdf = env_pdf(sky, d)
+                    cos = nrm[0] * d[0] + nrm[1] * d[1] + nrm[2] * d[2]
+                    if cos <= 0.0 or (strategy == 0 and not pdf > 0.0):
+                        continue
+                    rays += 1
+                    if any_hit(geo, offset_origin(p, nrm, d, _LIFT), d, 0.0, math.inf, stack, 0.0):
+                        continue
+                    le = env_radiance(sky, d)
+                    k = cos / ((pdf + cos / math.pi) * samples * math.pi)
+                    r += le[0] * k
+                    g += le[1] * k
+                    b += le[2] * k
+            out[i, 0] += rho[0] * r
+            out[i, 1] += rho[1] * g
+            out[i, 2] += rho[2] * b
+        rays_out[c] = rays
 
 
 @njit

@@ -120,8 +120,9 @@ def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
 
 
 def _first_light(compiled, recv, bvh, rs, seed):
-    """E of every element: its emission and the first bounce of point, spot and directional lights; (E, rays)."""
-    from ..kernels.radiosity import direct_light
+    """E of every element: its emission and the first bounce of point, spot and directional lights and of the
+    environment; (E, rays)."""
+    from ..kernels.radiosity import direct_light, sky_light
 
     n = len(recv.area)
     first = np.zeros((n, 3))
@@ -130,10 +131,16 @@ def _first_light(compiled, recv, bvh, rs, seed):
         parallel_for(lambda c0, c1: direct_light(bvh.arrays, compiled.arrays, recv, np.int64(rs.visibility_samples),
                                                  np.int64(seed), first, rays, np.int64(c0), np.int64(c1)),
                      0, len(rays))
+    if compiled.environment is not None:
+        sky = L.EnvironmentTable(*compiled.environment)
+        sky_rays = np.zeros_like(rays)
+        parallel_for(lambda c0, c1: sky_light(bvh.arrays, sky, recv, np.int64(rs.sky_samples), np.int64(seed), first,
+                                              sky_rays, np.int64(c0), np.int64(c1)), 0, len(rays))
+        rays += sky_rays
     sent = recv.emission + first
     if not np.any(sent > 0):
         raise LumosError("radiosity: nothing in the scene emits light (no area light, emissive object, point, spot "
-                         "or directional light reaches a surface)")
+                         "or directional light, or environment, reaches a surface)")
     return sent, int(rays.sum())
 
 

@@ -35,6 +35,8 @@ class RadiositySettings(StrictModel):
     hemicube_resolution: Annotated[int, Field(ge=8, le=4096)] = 128
     #: shadow rays per ray-cast form factor (and per patch for the direct light of point and directional lights)
     visibility_samples: Annotated[int, Field(ge=1, le=1024)] = 8
+    #: with an environment: rays per patch that gather its light (drawn in proportion to its radiance)
+    sky_samples: Annotated[int, Field(ge=1, le=65536)] = 64
     #: largest patch edge in world units (default: 1/24 of the scene's bounds' diagonal)
     patch_size: Optional[Positive] = None
     #: adaptive refinement: split patches whose radiance differs from a neighbour's by more than the threshold
