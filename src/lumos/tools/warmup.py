@@ -135,6 +135,8 @@ def _warm_radiosity() -> None:
     scene["lights"].append({"type": "point", "position": [0.3, 0.8, 0.3], "intensity": 0.5})
     scene["materials"]["mirror"] = {"kr": 0.9}
     scene["objects"][-1]["material"] = "mirror"
+    scene.pop("background", None)
+    scene["environment"] = {"color": [0.2, 0.2, 0.25]}  # gathered as a sky light (kernels.radiosity.sky_light)
     _render(scene, "radiosity", radiosity={"solver": "stochastic", "rays": 2000})
     # the matrix solvers, hemicube form factors, adaptive subdivision and the flat display
     for solver in ("gauss_seidel", "jacobi"):
