@@ -145,7 +145,8 @@ def _render_flags(render: argparse.ArgumentParser) -> None:
                       "far at most this often, so that a killed render leaves a valid image")
     path.add_argument("--denoise", action="store_const", const=True, help="denoise the final image with Intel Open "
                       "Image Denoise (pip install pyoidn), guided by the albedo and normal AOVs")
-    path.add_argument("--filter", metavar="F", help="pixel filter: box (default) or gaussian")
+    path.add_argument("--filter", metavar="F", help="pixel filter: box (default) or gaussian (also raycast's, "
+                      "whitted's supersampling and raster's passes)")
     path.add_argument("--sampler", metavar="S", help="sobol (default: stratified Owen-scrambled Sobol points) or "
                       "independent (uniform random numbers)")
     path.add_argument("--sampling", metavar="S", help="direct light by mis (default: light and BSDF sampling, "

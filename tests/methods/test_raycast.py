@@ -389,3 +389,38 @@ def test_one_sided_emitters_show_their_emission_on_the_front_only(method):
         np.testing.assert_allclose(centre(True, False, light), [2, 3, 4], rtol=1e-6)
         np.testing.assert_array_equal(centre(False, False, light), [0, 0, 0])
         np.testing.assert_allclose(centre(False, True, light), [2, 3, 4], rtol=1e-6)
+
+
+@pytest.mark.parametrize("method", ["raycast", "whitted", "raster"])
+def test_the_gaussian_pixel_filter_blurs_an_edge_as_its_cdf_says(method):
+    """A white half-plane whose edge is a pixel boundary, seen head-on: with the box filter the pixels beside the
+    edge are 0 and 1; with the Gaussian (σ = 0.5 pixel, truncated at 2, Mitsuba's) each sample is drawn from the
+    filter about the pixel's centre, so the pixel half a pixel left of the edge shows the mass beyond 0.5 pixel,
+    (Φ(4) − Φ(1))/(Φ(4) − Φ(−4)) = 0.1587, and the one 1.5 pixels away (Φ(4) − Φ(3))/(…) = 0.0013."""
+    from math import erf, sqrt
+
+    def phi(x):
+        return 0.5 * (1 + erf(x / sqrt(2)))
+
+    scene = {"camera": {"type": "orthographic", "position": [0, 0, 4], "look_at": [0, 0, 0], "size": 2},
+             "render": {"width": 16, "height": 16, "method": method, "spp": 1024, "antialias": "supersample"},
+             "ambient": 1.0,
+             "objects": [{"type": "rect", "corner": [0, -2, 0], "edge_u": [4, 0, 0], "edge_v": [0, 4, 0],
+                          "material": {"ka": 1.0, "kd": 0.0}}]}
+    box = lumos.render(scene).array[:, :, 1]
+    np.testing.assert_allclose(box[:, 7], 0.0, atol=1e-6)
+    np.testing.assert_allclose(box[:, 8], 1.0, atol=1e-6)
+    # (mean over rows: a pixel's 32 samples in the stratum the edge cuts are a binomial draw; raster's passes
+    # place every pixel's samples alike)
+    smooth = lumos.render(scene, filter="gaussian").array[2:14, :, 1].mean(axis=0)
+    total = phi(4) - phi(-4)
+    assert smooth[7] == pytest.approx((phi(4) - phi(1)) / total, abs=0.01)
+    assert smooth[8] == pytest.approx((phi(1) - phi(-4)) / total, abs=0.01)
+    assert smooth[6] == pytest.approx((phi(4) - phi(3)) / total, abs=0.003)
+    assert smooth[5] == pytest.approx(0.0, abs=1e-6)  # 2.5 pixels: beyond the filter's radius
+
+
+def test_adaptive_anti_aliasing_refuses_the_gaussian_filter():
+    scene = {"camera": {"position": [0, 0, 4], "look_at": [0, 0, 0]}, "objects": [{"type": "sphere"}]}
+    with pytest.raises(lumos.LumosError, match="render.filter: gaussian filtering needs supersample"):
+        lumos.render(scene, method="whitted", antialias="adaptive", filter="gaussian", width=8, height=8)

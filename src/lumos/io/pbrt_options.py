@@ -16,8 +16,8 @@ exporters from right-handed tools write before LookAt) is read as it is.
 lumos `size` = 2 (W ≥ H) or 2·H/W.
 
 **Samples.** `pixelsamples` (stratified: `xsamples`·`ysamples`) is `spp`; every pbrt sampler is read as lumos's
-Sobol points. pbrt's default pixel filter is a Gaussian (σ = 0.5 pixel), which is lumos's path-only `filter:
-gaussian`: a scene without `PixelFilter "box"` needs `--filter box` for the other methods (as Mitsuba scenes do).
+Sobol points. pbrt's default pixel filter is a Gaussian (σ = 0.5 pixel), which is lumos's `filter: gaussian`
+(every method's supersampling honours it but whitted's adaptive anti-aliasing, which needs `--filter box`).
 
 **Depth.** pbrt's `maxdepth` counts scattering events: 1 is direct light only (PathIntegrator::Li ends the path
 when `depth++ == maxDepth`, before sampling a light), lumos's `max_depth` counts the bounces after the first hit

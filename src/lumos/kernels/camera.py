@@ -5,8 +5,11 @@
     orthographic:  o = position + sx·a·(size/2)·u + sy·(size/2)·v,  d = −w
     thin lens:     o = position + aperture·(lx·u + ly·v), aimed at the pinhole ray's point at focus_distance
 
-With one sample per pixel the pixel centre is used (jx = jy = 0.5); otherwise `spp` stratified jittered points.
-Random dimensions 0–1 place the sample in the pixel, 2–3 on the lens.
+With one sample per pixel the pixel centre is used (jx = jy = 0.5); otherwise `spp` stratified jittered points,
+uniform over the pixel (the box filter) or drawn from the Gaussian filter about its centre (σ = 0.5 pixel,
+truncated at 2: Mitsuba's `gaussian`), each by inverting the filter's CDF at a stratified point, so that every
+sample weighs the same (filter importance sampling, as `path` does). Random dimensions 0–1 place the sample in the
+pixel, 2–3 on the lens.
 
 Texture filtering in the ray methods follows each camera ray's cone (`camera_cone`; Akenine-Möller et al. 2019,
 "Texture Level of Detail Strategies for Real-Time Ray Tracing"): perspective, width 0 at the eye and spread
@@ -17,11 +20,28 @@ resolve what lies within the pixel.
 
 import math
 
+import numpy as np
+
 from .jit import njit_inline
-from .layout import CAM_APERTURE, CAM_FOCUS, CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
+from .layout import CAM_APERTURE, CAM_FILTER, CAM_FOCUS, CAM_HALF_SIZE, CAM_ORTHO, CAM_TAN_HALF_FOV
 from .rng import rand01
-from .sampling import concentric_disk, stratified_2d
+from .sampling import concentric_disk, stratified_2d, truncated_gaussian
 from .vec import madd, mul, normalize, row3, sub
+
+
+#: Pixel filters (cam_params[CAM_FILTER]); the Gaussian's standard deviation and radius in pixels (Mitsuba's)
+FILTER_BOX, FILTER_GAUSSIAN = 0, 1
+GAUSSIAN_SIGMA = 0.5
+GAUSSIAN_RADIUS = 2.0
+
+
+@njit_inline
+def filter_offset(kind, u):
+    """Where in (or about) its pixel a sample lands along one axis, from u ∈ [0, 1): u itself (box), or the
+    Gaussian filter's inverse CDF about the centre."""
+    if kind == FILTER_GAUSSIAN:
+        return 0.5 + truncated_gaussian(u, GAUSSIAN_SIGMA, GAUSSIAN_RADIUS)
+    return u
 
 
 @njit_inline
@@ -31,6 +51,8 @@ def camera_ray(cam_vecs, cam_params, width, height, x, y, sample, spp, seed, pix
         jx, jy = 0.5, 0.5
     else:
         jx, jy = stratified_2d(sample, spp, rand01(seed, pixel, sample, 0), rand01(seed, pixel, sample, 1))
+        kind = np.int64(cam_params[CAM_FILTER])
+        jx, jy = filter_offset(kind, jx), filter_offset(kind, jy)
     lx, ly = 0.5, 0.5
     if cam_params[CAM_APERTURE] != 0.0:
         lx, ly = rand01(seed, pixel, sample, 2), rand01(seed, pixel, sample, 3)

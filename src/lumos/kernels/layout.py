@@ -121,7 +121,8 @@ CAM_TAN_HALF_FOV = 1
 CAM_HALF_SIZE = 2  # orthographic: half the vertical extent
 CAM_APERTURE = 3
 CAM_FOCUS = 4
-CAM_SIZE = 5
+CAM_FILTER = 5  # the pixel filter that places raycast's and whitted's supersamples: camera.FILTER_BOX or _GAUSSIAN
+CAM_SIZE = 6
 
 # BVH nodes: 32 bytes each (six float32 bounds, two int32 links) so that a pair of siblings fills one 64-byte
 # cache line. Interior: NODE_FIRST = first child (its sibling follows), NODE_COUNT = 0. Leaf: NODE_FIRST = first

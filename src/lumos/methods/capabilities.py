@@ -20,7 +20,6 @@ ANTIALIAS: dict[str, dict[str, str]] = {
 PATH_ONLY = (
     ("time_limit", lambda s: s.time_limit is not None, "--time-limit"),
     ("denoise", lambda s: s.denoise, "--denoise"),
-    ("filter", lambda s: s.filter != "box", "--filter"),
     ("sampling", lambda s: s.sampling != "mis", "--sampling"),
     ("sampler", lambda s: s.sampler != "sobol", "--sampler"),
 )
@@ -37,6 +36,9 @@ def check_settings(settings) -> None:
         takes = " or ".join(f"{mode} ({meaning})" if meaning else mode for mode, meaning in modes.items())
         raise LumosError(f"render.antialias: {settings.antialias} anti-aliasing is a whitted feature; {method} "
                          f"takes {takes}")
+    if settings.filter != "box" and settings.antialias == "adaptive":
+        raise LumosError(f"render.filter: {settings.filter} filtering needs supersample anti-aliasing; adaptive "
+                         "anti-aliasing subdivides the pixel's square (a box filter)")
     if method != "path":
         for key, given, flag in PATH_ONLY:
             if given(settings):

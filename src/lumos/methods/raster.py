@@ -309,11 +309,19 @@ def _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_ter
         rays_per_row[y] += rays
 
 
-def sample_offsets(spp: int, seed: int) -> list[tuple[float, float]]:
-    """Where each pass samples its pixels: the centre for one pass, else stratified jittered points."""
+def sample_offsets(spp: int, seed: int, pixel_filter: str = "box") -> list[tuple[float, float]]:
+    """Where each pass samples its pixels: the centre for one pass, else stratified jittered points, uniform in
+    the pixel (box) or drawn from the Gaussian filter about its centre (as `kernels.camera.filter_offset`)."""
     if spp == 1:
         return [(0.5, 0.5)]
-    return [stratified_2d(s, spp, rand01(seed, 0, s, 0), rand01(seed, 0, s, 1)) for s in range(spp)]
+    points = [stratified_2d(s, spp, rand01(seed, 0, s, 0), rand01(seed, 0, s, 1)) for s in range(spp)]
+    if pixel_filter != "gaussian":
+        return points
+    from ..kernels.camera import GAUSSIAN_RADIUS, GAUSSIAN_SIGMA
+    from ..kernels.sampling import truncated_gaussian
+
+    return [(0.5 + truncated_gaussian(jx, GAUSSIAN_SIGMA, GAUSSIAN_RADIUS),
+             0.5 + truncated_gaussian(jy, GAUSSIAN_SIGMA, GAUSSIAN_RADIUS)) for jx, jy in points]
 
 
 class Rasterizer:
@@ -438,7 +446,8 @@ class RasterFrame:
         cutouts = textured and bool((sa.materials[:, MAT_CUTOUT] != 0.0).any())
         self.raster = Rasterizer(mesh, attrs, camera, width, height, settings.cull_backfaces,
                                  settings.perspective_correct, (sa, self.uv_at) if cutouts else None)
-        self.offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
+        self.offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed,
+                                      settings.filter)
 
     def shade_pass(self, s, weight, radiance, aov_buffers, terms, want_terms, rays_per_row, explain=_NO_PIXEL,
                    light_log=None):
@@ -540,7 +549,7 @@ def draw_colours(positions, normals, faces, vertex_colour, face_colour, face_alb
     radiance = np.zeros((height, width, 3), np.float32)
     want_aovs = bool(settings.aov)
     depth, normal, albedo, object_id = allocate_aovs(height, width) if want_aovs else allocate_aovs(1, 1)
-    offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed)
+    offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed, settings.filter)
     shading = FLAT if settings.radiosity.display == "flat" else GOURAUD
     colours, bg = np.ascontiguousarray(face_colour, np.float64), np.asarray(background, np.float64)
     albedos, objects = np.ascontiguousarray(face_albedo, np.float64), np.ascontiguousarray(face_object, np.int32)

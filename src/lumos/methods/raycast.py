@@ -136,7 +136,7 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None, rows
     # a large mesh: BENCHMARKS.md)
     threads, b = start(settings, aovs_if_asked=True)
     spp = 1 if settings.antialias == "none" else settings.spp
-    cam_vecs, cam_params = camera_arrays(camera)
+    cam_vecs, cam_params = camera_arrays(camera, settings.filter)
     pixel, light_log, bands = _NO_PIXEL, np.zeros((0, PER_LIGHT_SIZE)), row_bands(height, rows=rows)
     if explain is not None:
         pixel, light_log, bands = np.array(explain[:2], np.int64), explain[2], [(explain[1], explain[1] + 1)]

@@ -168,7 +168,7 @@ def render_whitted(compiled, camera, settings, progress=None, rows=None) -> Film
     samples, so a tile's pixels are those of the whole image)."""
     width, height = settings.width, settings.height
     threads, b = start(settings, bytes_per_pixel=80)
-    cam_vecs, cam_params = camera_arrays(camera)
+    cam_vecs, cam_params = camera_arrays(camera, settings.filter)
     cam_time = np.array(camera.shutter, dtype=np.float64)
     sa = compiled.arrays
     seed = np.int64(settings.seed)

@@ -110,7 +110,7 @@ def _whitted(scene, compiled, cfg, x, y, context) -> dict:
     spp = 1 if mode == W.AA_NONE else cfg.spp
     points = (2 ** cfg.adaptive_depth + 1) ** 2 if mode == W.AA_ADAPTIVE else spp
     rows = int(min(max(points * (2 ** (min(max_depth, 12) + 1)), 64), 400_000))
-    cam_vecs, cam_params = camera_arrays(scene.camera)
+    cam_vecs, cam_params = camera_arrays(scene.camera, cfg.filter)
     value, log, light_log, used, weight = W.explain_pixel(
         compiled.arrays, cam_vecs, cam_params, np.array(scene.camera.shutter, np.float64), np.int64(cfg.width),
         np.int64(cfg.height), np.int64(x), np.int64(y), np.int64(mode), np.int64(spp), np.int64(cfg.seed),
