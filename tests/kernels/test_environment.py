@@ -216,3 +216,21 @@ def test_a_sphere_under_half_a_sky_is_lit_from_above_by_every_classic_method(met
     expected = np.broadcast_to((1 + np.clip(ys, -1, 1)) / 2, (33, 33))
     # raster's sphere is tessellated: its interpolated normals are off by a little near the rim
     np.testing.assert_allclose(img.array[inside][:, 1], expected[inside], atol=0.03 if method == "raster" else 5e-3)
+
+
+def test_raster_and_radiosity_show_the_environment_where_nothing_is_drawn():
+    """The scan-converting methods look the environment up along each pixel's camera ray where no surface is
+    drawn, as raycast does (its image turned by its rotation): the sky pixels agree."""
+    rng = np.random.default_rng(3)
+    np.save("/tmp/lumos_test_env_bg.npy", rng.random((16, 32, 3)).astype(np.float32))
+    scene = {"camera": {"position": [0, 0.5, 4], "look_at": [0, 0, 0], "fov": 70},
+             "render": {"width": 40, "height": 30, "antialias": "none"},
+             "environment": {"file": "/tmp/lumos_test_env_bg.npy", "rotation": 25},
+             "objects": [{"type": "sphere", "radius": 0.5, "material": {"kd": 0.5}}]}
+    ref = lumos.render(scene, method="raycast", aov=["object_id"])
+    sky = ref.aovs["object_id"] < 0
+    assert sky.mean() > 0.8
+    for method in ("raster", "radiosity"):
+        img = lumos.render(scene, method=method).array
+        same = np.all(img[sky] == ref.array[sky], axis=1)
+        assert same.mean() > 0.98, (method, same.mean())  # (a ray on a texel's edge may round the other way)

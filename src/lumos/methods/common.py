@@ -152,3 +152,34 @@ def finish(settings, buffers: Buffers, threads: int, samples, rays: int, primary
         all_aovs.update(term_aovs(b.terms))
     return Film(b.radiance, {name: all_aovs[name] for name in settings.aov}, rays, threads,
                 primary_rays=primary_rays)
+
+
+def background_image(environment, background, camera, width: int, height: int) -> np.ndarray:
+    """float64 (H, W, 3): what a camera ray through each pixel's centre sees where it leaves the scene, for the
+    methods that scan-convert (raster, radiosity's display): the environment (`CompiledScene.environment`) looked
+    up along it as the ray methods do (`kernels.environment.sky_radiance`), or the background colour."""
+    out = np.empty((height, width, 3))
+    if environment is None:
+        out[:] = np.asarray(background, np.float64)
+        return out
+    from ..compile.camera import camera_arrays
+    from ..kernels.layout import CAM_ORTHO, CAM_TAN_HALF_FOV, ENV_COS, ENV_SIN
+
+    pixels, _, _, info = environment
+    vecs, params = camera_arrays(camera)
+    u, v, w = vecs[1], vecs[2], vecs[3]
+    sx = 2.0 * (np.arange(width) + 0.5) / width - 1.0
+    sy = 1.0 - 2.0 * (np.arange(height) + 0.5) / height
+    if params[CAM_ORTHO] != 0.0:  # every ray goes along −w
+        d = np.broadcast_to(-w, (height, width, 3))
+    else:
+        t = params[CAM_TAN_HALF_FOV]
+        d = (sx[None, :, None] * (width / height) * t * u + sy[:, None, None] * t * v) - w
+        d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+    c, s = info[ENV_COS], info[ENV_SIN]
+    x, z = c * d[..., 0] - s * d[..., 2], s * d[..., 0] + c * d[..., 2]  # turned back by the rotation
+    h, wd = pixels.shape[:2]
+    col = np.clip(((0.5 + np.arctan2(x, -z) / (2.0 * np.pi)) * wd).astype(np.int64), 0, wd - 1)
+    row = np.minimum((np.arccos(np.clip(d[..., 1], -1.0, 1.0)) / np.pi * h).astype(np.int64), h - 1)
+    out[:] = pixels[row, col]
+    return out

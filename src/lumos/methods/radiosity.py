@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import LumosError
 from ..kernels.threads import parallel_for
 from .capabilities import check_settings
-from .common import Film
+from .common import Film, background_image
 from .raster import draw_colours
 
 
@@ -61,7 +61,9 @@ def render_radiosity(compiled, camera, settings, progress=None, solution=None) -
         face = solution.face_element
         film = draw_colours(solution.vertices, solution.vertex_normal, solution.faces, solution.vertex_radiance,
                             solution.element_radiance[face], solution.element_reflectance[face],
-                            solution.element_object[face], camera, settings, compiled.arrays.background, progress)
+                            solution.element_object[face], camera, settings,
+                            background_image(compiled.environment, compiled.arrays.background, camera,
+                                             settings.width, settings.height), progress)
     film.extra = {"radiosity": dict(solution.stats)}
     film.rays += solve_rays  # the solve's shadow and visibility rays count as this render's rays
     return film

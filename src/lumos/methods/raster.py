@@ -38,7 +38,7 @@ from ..kernels.bump import bump_normal_filtered
 from ..kernels.texture import TEX_SIZE, material_coeffs_filtered
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
-from .common import Film, allocate_aovs, check_memory, finish, set_threads, start
+from .common import Film, allocate_aovs, background_image, check_memory, finish, set_threads, start
 
 FLAT, GOURAUD, PHONG = 0, 1, 2
 _SHADING = {"flat": FLAT, "gouraud": GOURAUD, "phong": PHONG}
@@ -203,7 +203,7 @@ def _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
 
 
 @njit_serial
-def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
+def _shade(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
            pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
            object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1):
     """One shading pass over the G-buffer: adds weight × each pixel's radiance to `accum` (float32) and, with
@@ -211,14 +211,14 @@ def _shade(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, f
     (the first pass, when any is asked for) it also fills the AOV buffers. At pixel `explain` (x, y; (−1, −1)
     for none) Phong shading records each light's share in `light_log` (`lumos.explain`). `uv_at` is the G-buffer channel of
     (u, v) (−1: the scene has no textures), `light_at` that of Gouraud's interpolated light. Rows y0 … y1−1."""
-    _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
+    _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
                 pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
                 object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1,
                 np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
 
 
 @njit
-def _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
+def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
                 pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
                 object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1, stack, stack_t):
     width = ids.shape[1]
@@ -230,9 +230,9 @@ def _shade_band(sa, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_ter
             prim = ids[y, x]
             if prim < 0:
                 for k in range(3):
-                    accum[y, x, k] += weight * sa.background[k]
+                    accum[y, x, k] += weight * bg[y, x, k]
                     if want_terms:
-                        terms[y, x, 9 + k] += weight * sa.background[k]
+                        terms[y, x, 9 + k] += weight * bg[y, x, k]
                 continue
             mat_id = prim_info[prim, 0]
             mat = lit.materials[mat_id]
@@ -405,6 +405,7 @@ class RasterFrame:
         self.shadows = bool(settings.shadows)
         self.cam_vecs, cam_params = camera_arrays(camera)
         self.ortho = camera.type == "orthographic"
+        self.background = background_image(compiled.environment, sa.background, camera, width, height)
         half = cam_params[CAM_HALF_SIZE] if self.ortho else cam_params[CAM_TAN_HALF_FOV]
         self.pixel_size = 2.0 * half / height  # one pixel's step in the image plane at unit depth (or world units)
         self.seed = np.int64(settings.seed)
@@ -458,7 +459,8 @@ class RasterFrame:
         want_aovs = aov_buffers is not None
         depth, normal, albedo, object_id = aov_buffers if want_aovs else allocate_aovs(1, 1)
         log = light_log if light_log is not None else np.zeros((0, PER_LIGHT_SIZE))
-        parallel_for(lambda y0, y1: _shade(self.sa, ids, gbuf, np.int64(self.uv_at), np.int64(self.light_at),
+        parallel_for(lambda y0, y1: _shade(self.sa, self.background, ids, gbuf, np.int64(self.uv_at),
+                                           np.int64(self.light_at),
                                            self.mesh.prim_info, self.mesh.prim_normal, self.prim_terms, self.frames,
                                            self.cam_vecs, self.ortho, self.pixel_size, np.int64(self.shading),
                                            bool(self.settings.mipmap), self.seed, np.int64(s), self.shadows, weight,
@@ -506,7 +508,7 @@ def _shade_colours(ids, gbuf, prim_colour, shading, background, weight, accum, a
             prim = ids[y, x]
             if prim < 0:
                 for c in range(3):
-                    accum[y, x, c] += weight * background[c]
+                    accum[y, x, c] += weight * background[y, x, c]
                 continue
             for c in range(3):
                 v = prim_colour[prim, c] if shading == FLAT else np.float64(gbuf[y, x, G_COLOUR + c])
@@ -524,7 +526,8 @@ def draw_colours(positions, normals, faces, vertex_colour, face_colour, face_alb
                  background, progress=None) -> Film:
     """Scan-convert one-sided triangles that carry their own colours (a radiosity solution's display mesh):
     Gouraud interpolates `vertex_colour` (nv, 3), flat shows `face_colour` (nf, 3) per triangle; back faces are
-    culled (each side of a surface that is seen has its own triangles). Anti-aliasing as `render_raster`."""
+    culled (each side of a surface that is seen has its own triangles); pixels that nothing covers show
+    `background`, one colour (3,) or an image (H, W, 3). Anti-aliasing as `render_raster`."""
     width, height = settings.width, settings.height
     check_memory(width, height, bytes_per_pixel=96)
     threads = set_threads(settings.threads)
@@ -552,6 +555,8 @@ def draw_colours(positions, normals, faces, vertex_colour, face_colour, face_alb
     offsets = sample_offsets(1 if settings.antialias == "none" else settings.spp, settings.seed, settings.filter)
     shading = FLAT if settings.radiosity.display == "flat" else GOURAUD
     colours, bg = np.ascontiguousarray(face_colour, np.float64), np.asarray(background, np.float64)
+    if bg.ndim == 1:  # one colour: every pixel's
+        bg = np.ascontiguousarray(np.broadcast_to(bg, (height, width, 3)))
     albedos, objects = np.ascontiguousarray(face_albedo, np.float64), np.ascontiguousarray(face_object, np.int32)
     ortho = camera.type == "orthographic"
     for s, (jx, jy) in enumerate(offsets):
