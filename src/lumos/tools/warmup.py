@@ -34,6 +34,10 @@ FAMILIES = {
 }
 #: families compiled first, in this process (the others, in their own processes, load what they share)
 FIRST = ("bvh",)
+#: families warmed only when named (`lumos warmup --methods explain`): lumos explain's one-pixel kernels take
+#: about a fifth of the whole warm-up (the integrators compiled again with the ray log), for a teaching tool that
+#: compiles them on its first use instead (BENCHMARKS.md, "Time to first image")
+ON_REQUEST = ("explain",)
 SMALL = {"width": 48, "height": 36, "spp": 1}
 
 
@@ -125,7 +129,10 @@ def _warm_whitted() -> None:
 
 
 def _warm_path() -> None:
-    _render(_box(), "path")
+    scene = _box()  # with a second light, so that the light tree is built (`kernels.light_tree_build`)
+    scene["lights"].append({"type": "area", "shape": "sphere", "center": [0.5, 0.5, 0.3], "radius": 0.1,
+                            "radiance": 2.0})
+    _render(scene, "path")
 
 
 def _warm_radiosity() -> None:
@@ -203,9 +210,10 @@ def _child(family: str, cache_dir: Optional[str]) -> FamilyResult:
 
 
 def families_for(methods: Optional[Iterable[str]]) -> list[str]:
-    """The families to warm for `methods` (None: all), FIRST ones included; unknown names raise ValueError."""
+    """The families to warm for `methods` (None: all but the ON_REQUEST ones), FIRST ones included; unknown names
+    raise ValueError."""
     if methods is None:
-        return list(FAMILIES)
+        return [f for f in FAMILIES if f not in ON_REQUEST]
     names = [m.strip() for m in methods if m.strip()]
     unknown = [m for m in names if m not in FAMILIES]
     if unknown:
