@@ -285,7 +285,7 @@ def test_material_that_creates_energy_is_scaled_with_a_warning():
 
 def test_path_only_settings_are_refused_elsewhere():
     scene = {"objects": [{"type": "sphere"}]}
-    for key, value in (("time_limit", 1.0), ("denoise", True), ("filter", "gaussian"), ("sampling", "light")):
+    for key, value in (("time_limit", 1.0), ("denoise", True), ("sampling", "light")):
         with pytest.raises(LumosError, match=f"render.{key}: .*path feature"):
             lumos.render(scene, method="whitted", **{key: value})
     with pytest.raises(LumosError, match="variance.*path"):
