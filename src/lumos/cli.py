@@ -31,7 +31,7 @@ from .errors import LumosError, LumosWarning
 
 #: render flags that override the scene's `render:` block (argparse dest == setting name).
 SETTING_FLAGS = ("method", "shading", "width", "height", "spp", "max_depth", "seed", "threads", "exposure", "aov",
-                 "antialias", "time_limit", "denoise", "filter", "sampling", "sampler", "mipmap")
+                 "antialias", "time_limit", "denoise", "filter", "sampling", "sampler", "light_selection", "mipmap")
 #: The methods, for the help text (kept in step with `api.METHODS` by a test).
 METHOD_HELP = ("raycast (ray casting), raster (scan-line, z-buffer), whitted (recursive ray tracing), path "
                "(path tracing, global illumination) or radiosity (diffuse global illumination over patches)")
@@ -151,6 +151,8 @@ def _render_flags(render: argparse.ArgumentParser) -> None:
                       "independent (uniform random numbers)")
     path.add_argument("--sampling", metavar="S", help="direct light by mis (default: light and BSDF sampling, "
                       "multiple importance sampling), light (light sampling only) or bsdf (BSDF sampling only)")
+    path.add_argument("--light-selection", metavar="S", help="how light sampling picks an emitter: tree (default: "
+                      "by its estimated contribution at the point, a light BVH) or power (by its power alone)")
 
 
 def build_parser() -> argparse.ArgumentParser:

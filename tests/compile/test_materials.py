@@ -74,5 +74,27 @@ def test_a_plastic_keeps_its_base_carries_its_coat_tables_and_reads_classically_
 
 
 def test_a_material_is_a_metal_or_a_plastic_not_both():
-    with pytest.raises(lumos.LumosError, match="give conductor or plastic, not both"):
+    with pytest.raises(lumos.LumosError, match="give one of conductor, plastic and dielectric, not conductor and "
+                                               "plastic"):
         rows_of({"conductor": {}, "plastic": {}})
+
+
+def test_glass_carries_its_relative_index_widths_and_tints_and_reads_classically_as_kt_ior_glass():
+    smooth, rough = rows_of({"dielectric": {"ior": 1.5, "ext_ior": 1.2, "transmit_tint": [0.9, 0.8, 0.7]}},
+                            {"dielectric": {"ior": 1.5, "alpha": [0.1, 0.3], "tint": 0.5}})
+    for row in (smooth, rough):
+        assert row[L.MAT_MODEL] == L.MODEL_DIELECTRIC and row[L.MAT_FRESNEL] == 1.0
+        np.testing.assert_array_equal(row[L.MAT_KD:L.MAT_KD + 3], 0.0)
+    assert smooth[L.MAT_ETA] == smooth[L.MAT_IOR] == pytest.approx(1.25)  # local methods: the relative index
+    np.testing.assert_allclose(smooth[L.MAT_KT:L.MAT_KT + 3], [0.9, 0.8, 0.7])
+    np.testing.assert_allclose(smooth[L.MAT_TINT_T:L.MAT_TINT_T + 3], [0.9, 0.8, 0.7])
+    np.testing.assert_array_equal(smooth[L.MAT_KS:L.MAT_KS + 3], 0.0)
+    np.testing.assert_allclose(rough[L.MAT_KS:L.MAT_KS + 3], 0.5 * 0.04)  # a highlight of F0, as wide as GGX
+    assert rough[L.MAT_SHININESS] == pytest.approx(phong_exponent(0.2))
+    np.testing.assert_array_equal(rough[L.MAT_ALPHA:L.MAT_ALPHA + 2], [0.1, 0.3])
+    np.testing.assert_allclose(rough[L.MAT_TINT:L.MAT_TINT + 3], 0.5)
+    p_smooth, p_rough = physical_materials(["s", "r"], np.stack([smooth, rough]))  # one lobe of weight 1
+    np.testing.assert_array_equal(p_smooth[[L.MAT_KD, L.MAT_KS, L.MAT_KR, L.MAT_KT]], [0.0, 0.0, 0.0, 1.0])
+    np.testing.assert_array_equal(p_rough[[L.MAT_KD, L.MAT_KS, L.MAT_KR, L.MAT_KT]], [0.0, 1.0, 0.0, 0.0])
+    with pytest.raises(lumos.LumosError, match="ior must differ from ext_ior"):
+        rows_of({"dielectric": {"ior": 1.3, "ext_ior": 1.3}})

@@ -212,10 +212,30 @@ NamedMaterial "half"
 Shape "sphere"
 """)
     assert data["objects"][0]["material"] == "red" and data["materials"]["red"]["kd"] == [0.8, 0.1, 0.1]
-    assert data["materials"]["glass"] == {"kt": 1.0, "ior": 1.5185, "fresnel": True}
+    assert data["materials"]["glass"] == {"dielectric": {"ior": 1.5185, "alpha": 0.0}}
     half = data["materials"]["half"]
     assert half["kd"] == pytest.approx([0.6, 0.075, 0.075]) and half["kt"] == pytest.approx([0.25] * 3)
     assert half["ior"] == 1.5185
+
+
+def test_rough_dielectric_is_lumos_dielectric(tmp_path):
+    """pbrt's dielectric with roughness is lumos's rough `dielectric`: α = √r (r itself with remaproughness
+    false), uroughness/vroughness as [αu, αv]; below α 10⁻³ smooth, as pbrt's EffectivelySmooth; η 1 a
+    pass-through."""
+    data, _, _ = read(tmp_path, """
+MakeNamedMaterial "a" "string type" "dielectric" "float eta" 1.33 "float roughness" 0.04
+MakeNamedMaterial "b" "string type" "dielectric" "float uroughness" 0.01 "float vroughness" 0.25
+MakeNamedMaterial "c" "string type" "dielectric" "float roughness" 0.3 "bool remaproughness" false
+MakeNamedMaterial "d" "string type" "dielectric" "float roughness" 1e-7
+MakeNamedMaterial "e" "string type" "dielectric" "float eta" 1
+Shape "sphere"
+""")
+    m = data["materials"]
+    assert m["a"] == {"dielectric": {"ior": 1.33, "alpha": pytest.approx(0.2)}}
+    assert m["b"]["dielectric"]["alpha"] == pytest.approx([0.1, 0.5])
+    assert m["c"]["dielectric"]["alpha"] == pytest.approx(0.3)
+    assert m["d"]["dielectric"]["alpha"] == 0.0
+    assert m["e"] == {"kt": 1.0, "ior": 1.0}
 
 
 # ------------------------------------------------------------------------------------------- lights

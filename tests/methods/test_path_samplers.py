@@ -30,6 +30,8 @@ from lumos.kernels.views import geometry_of, lighting_of, surfaces_of
 #: of them at 1%.
 N_TESTS = 31
 LEVEL = significance_level(0.01, N_TESTS)
+#: The shading normal given to light selection: none (the light tree then leaves out the cosine at p)
+NO_NORMAL = (0.0, 0.0, 0.0)
 
 # ---------------------------------------------------------------------------------------------- BSDF lobes
 
@@ -41,7 +43,7 @@ def _smooth_batch(kd, ks, lobe, p_d, p_s, n, wo, u):
     dirs = np.full((m, 3), np.nan)
     weights = np.zeros((m, 3))
     for i in range(m):
-        wi, w, pdf = bsdf.sample_smooth(kd, ks, lobe, p_d, p_s, n, wo, u[i, 0] * (p_d + p_s), u[i, 1], u[i, 2])
+        wi, w, pdf = bsdf.sample_smooth(kd, ks, lobe, p_d, p_s, 1.0, n, wo, u[i, 0] * (p_d + p_s), u[i, 1], u[i, 2])
         if pdf > 0.0:
             for c in range(3):
                 dirs[i, c] = wi[c]
@@ -54,7 +56,7 @@ def _smooth_pdf(kd, ks, lobe, p_d, p_s, n, wo, dirs):
     out = np.empty(dirs.shape[0])
     for i in range(dirs.shape[0]):
         wi = (dirs[i, 0], dirs[i, 1], dirs[i, 2])
-        out[i] = bsdf.eval_smooth(kd, ks, lobe, p_d, p_s, n, wo, wi)[2]
+        out[i] = bsdf.eval_smooth(kd, ks, lobe, p_d, p_s, 1.0, n, wo, wi)[2]
     return out
 
 
@@ -228,7 +230,7 @@ def _ggx_f_kernel(lobe, n, wo, dirs):
     out = np.empty(dirs.shape[0])
     for i in range(dirs.shape[0]):
         wi = (dirs[i, 0], dirs[i, 1], dirs[i, 2])
-        out[i] = bsdf.eval_smooth((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), lobe, 0.0, 1.0, n, wo, wi)[1][0]
+        out[i] = bsdf.eval_smooth((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), lobe, 0.0, 1.0, 1.0, n, wo, wi)[1][0]
     return out
 
 
@@ -382,7 +384,7 @@ def _emitter_batch(em, geo, surf, lit, p, u, check_visible):
     m = u.shape[0]
     dirs = np.full((m, 3), np.nan)
     for i in range(m):
-        wi, dist, led, les, pdf, delta = sample_emitter(em, lit, surf, p, u[i, 0], u[i, 1], u[i, 2], 0.0)
+        wi, dist, led, les, pdf, delta = sample_emitter(em, lit, surf, p, NO_NORMAL, u[i, 0], u[i, 1], u[i, 2], 0.0)
         if not pdf > 0.0:
             continue
         if check_visible:
@@ -415,7 +417,7 @@ def _emitter_pdfs(em, geo, surf, lit, p, dirs):
         else:
             e = em.shape_emit[~ref]
         if e >= 0:
-            out[i] = emitter_pdf(em, lit, surf, e, p, d, hit[0], n_geo, ref, hit[4], 0.0)
+            out[i] = emitter_pdf(em, lit, surf, e, p, NO_NORMAL, d, hit[0], n_geo, ref, hit[4], 0.0)
     return out
 
 
@@ -478,7 +480,7 @@ def test_emitter_sampling_follows_its_pdf(case):
 
 def test_a_wrong_emitter_pdf_is_detected():
     """The same test, given a pdf that is off by 10% on part of the sphere, fails."""
-    objects, lights = EMITTER_CASES["emissive sphere"][0], []
+    objects = EMITTER_CASES["emissive sphere"][0]
     scene = lumos.load_scene({"objects": objects})
     compiled = compile_for(scene, scene.render.model_copy(update={"method": "path"}))
     em, sa = compiled.emitters, compiled.arrays

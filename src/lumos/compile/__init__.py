@@ -82,20 +82,22 @@ class _Materials:
         row[L.MAT_SHININESS] = 1.0
         row[L.MAT_IOR] = 1.0
         if material is not None:
-            classic = {k: getattr(material, k) for k in ("ka", "kd", "ks", "shininess", "kr")}
-            model = material.conductor or material.plastic
+            classic = {k: getattr(material, k) for k in ("ka", "kd", "ks", "shininess", "kr", "kt", "ior", "fresnel")}
+            model = material.physical
             if model is not None:  # the classic reading of a physical model, where not given
                 derived = model.classic()
                 classic.update({k: v for k, v in derived.items() if k not in material.model_fields_set})
-                (_conductor_columns if material.conductor is not None else _plastic_columns)(row, model)
+                columns = (_conductor_columns if material.conductor is not None else
+                           _plastic_columns if material.plastic is not None else _dielectric_columns)
+                columns(row, model)
             row[L.MAT_KA : L.MAT_KA + 3] = classic["ka"]
             row[L.MAT_KD : L.MAT_KD + 3] = classic["kd"]
             row[L.MAT_KS : L.MAT_KS + 3] = classic["ks"]
             row[L.MAT_SHININESS] = classic["shininess"]
             row[L.MAT_KR : L.MAT_KR + 3] = classic["kr"]
-            row[L.MAT_KT : L.MAT_KT + 3] = material.kt
-            row[L.MAT_IOR] = material.ior
-            row[L.MAT_FRESNEL] = 1.0 if material.fresnel else 0.0
+            row[L.MAT_KT : L.MAT_KT + 3] = classic["kt"]
+            row[L.MAT_IOR] = classic["ior"]
+            row[L.MAT_FRESNEL] = 1.0 if classic["fresnel"] else 0.0
         row[L.MAT_EMISSION : L.MAT_EMISSION + 3] = emission
         row[L.MAT_TEXTURE] = -1.0  # set by the texture step when the material has one
         row[L.MAT_BUMP] = -1.0
@@ -128,6 +130,15 @@ def _plastic_columns(row: np.ndarray, plastic) -> None:
     t, fdr = coat_tables(float(plastic.alpha), float(plastic.ior))
     row[L.MAT_FDR] = fdr
     row[L.MAT_COAT : L.MAT_COAT + L.MAT_COAT_SIZE] = t
+
+
+def _dielectric_columns(row: np.ndarray, glass) -> None:
+    """The physical model's columns of glass: its GGX widths, relative index and the two tints."""
+    row[L.MAT_MODEL] = L.MODEL_DIELECTRIC
+    row[L.MAT_ALPHA : L.MAT_ALPHA + 2] = glass.alphas
+    row[L.MAT_ETA] = glass.eta
+    row[L.MAT_TINT : L.MAT_TINT + 3] = glass.tint
+    row[L.MAT_TINT_T : L.MAT_TINT_T + 3] = glass.transmit_tint
 
 
 class _Shapes:

@@ -4,10 +4,11 @@
     em = build_emitters(arrays, bounds)               # kernels.layout.Emitters
 
 The table has one entry per scene light and one per emissive primitive (a triangle of an emissive mesh, an
-emissive sphere, box, cylinder, cone or disk). Next-event estimation picks an entry with probability
-proportional to its power (a CDF, searched by bisection in `kernels.emitters.pick_emitter`), then a point on
-it. Emissive planes (unbounded) and csg objects are not in the table: their light is found by BSDF sampling
-alone (with full weight), which is unbiased but noisier.
+emissive sphere, box, cylinder, cone or disk). Next-event estimation picks an entry by the light tree
+(`compile.light_tree`: by each emitter's estimated contribution at the shading point), or, with
+`light_selection: power`, with probability proportional to its power (a CDF, searched by bisection in
+`kernels.emitters.pick_emitter`), then a point on it. Emissive planes (unbounded) and csg objects are not in the
+table: their light is found by BSDF sampling alone (with full weight), which is unbiased but noisier.
 
 Power, in the units of DESIGN.md §3 (a point light of intensity I delivers irradiance π·I·cosθ/att(d)), with
 the mean of the RGB channels:
@@ -57,6 +58,13 @@ def physical_materials(names: list[str], rows: np.ndarray) -> np.ndarray:
         rows[np.flatnonzero(physical)[metal], L.MAT_KD : L.MAT_KD + 3] = 0.0
         rows[physical, L.MAT_KS : L.MAT_KS + 3] = np.where(smooth, 0.0, tint)
         rows[physical, L.MAT_KR : L.MAT_KR + 3] = np.where(smooth, tint, 0.0)
+    glass = rows[:, L.MAT_MODEL] == L.MODEL_DIELECTRIC  # one lobe of weight 1; its tints are in its own columns
+    if glass.any():  # (kernels.bsdf: a rough one is the glossy lobe, ks; a smooth one the transmission lobe, kt)
+        smooth = (rows[glass, L.MAT_ALPHA] + rows[glass, L.MAT_ALPHA + 1] == 0.0)[:, None]
+        rows[glass, L.MAT_KD : L.MAT_KD + 3] = 0.0
+        rows[glass, L.MAT_KR : L.MAT_KR + 3] = 0.0
+        rows[glass, L.MAT_KS : L.MAT_KS + 3] = np.where(smooth, 0.0, 1.0)
+        rows[glass, L.MAT_KT : L.MAT_KT + 3] = np.where(smooth, 1.0, 0.0)
     for i, row in enumerate(rows):
         if physical[i]:
             continue  # energy is the model's own: a plastic's kd + its coat's tint may pass 1
@@ -240,20 +248,30 @@ def build_emitters(arrays: L.SceneArrays, bounds: np.ndarray, environment: Optio
         env_marginal=env_marginal,
         env_conditional=env_conditional,
         env_info=env_info,
+        tree_nodes=np.zeros((0, L.TREE_SIZE)),
+        tree_link=np.zeros((0, 3), np.int32),
+        emit_node=np.full(n, -1, np.int32),
+        emit_unbounded=np.zeros(0, np.int32),
+        unbounded_cdf=np.zeros(0),
     )
 
 
-def attach(compiled) -> None:
+def attach(compiled, light_selection: str = "tree") -> None:
     """Ready a compiled scene (`compile_scene`) for the path tracer: its material rows read physically
-    (`physical_materials`) and its emitter table (`CompiledScene.emitters`), the scene's environment in it."""
+    (`physical_materials`) and its emitter table (`CompiledScene.emitters`), the scene's environment in it, with
+    its light tree (`compile.light_tree`) unless `light_selection` is "power" (then picked by power alone)."""
     rows = physical_materials(compiled.material_names, compiled.arrays.materials)
     compiled.arrays = compiled.arrays._replace(materials=rows)
     # emitters whose emission is textured are left to the BSDF rays (light sampling would need the texture at the
     # sampled point): the table is built as if they did not emit
     untextured = rows.copy()
     untextured[_textured_emission(rows, compiled.arrays.tex_info), L.MAT_EMISSION:L.MAT_EMISSION + 3] = 0.0
-    compiled.emitters = build_emitters(compiled.arrays._replace(materials=untextured), compiled.bounds,
-                                       compiled.environment)
+    untextured_arrays = compiled.arrays._replace(materials=untextured)
+    compiled.emitters = build_emitters(untextured_arrays, compiled.bounds, compiled.environment)
+    if light_selection == "tree":
+        from .light_tree import with_light_tree
+
+        compiled.emitters = with_light_tree(compiled.emitters, untextured_arrays)
 
 
 def _textured_emission(rows: np.ndarray, tex_info: np.ndarray) -> np.ndarray:

@@ -5,10 +5,9 @@
 
 Each BSDF is read as the lumos material that `path` renders closest to it: metals as lumos's `conductor`
 (GGX microfacets, the exact Fresnel factor of η + ik), plastics as lumos's `plastic` (a diffuse base under a
-GGX or smooth dielectric coat, Mitsuba's own model), the others as the classic model's coefficients; the reasons
-and the numbers are in docs/formats.md ("Mitsuba 3 scenes"). lumos has no rough glass yet: it stands in as smooth
-glass, with one warning per plugin; switching it to a microfacet material later is a change to its own function
-only.
+GGX or smooth dielectric coat, Mitsuba's own model), glass (smooth or rough) as lumos's `dielectric` (GGX
+reflection and refraction, Walter et al. 2007), the others as the classic model's coefficients; the reasons and
+the numbers are in docs/formats.md ("Mitsuba 3 scenes").
 """
 
 from __future__ import annotations
@@ -21,7 +20,7 @@ from typing import Optional
 import numpy as np
 
 from ..errors import LumosError, LumosWarning
-from ..scene.materials import phong_exponent  # (the Phong lobe as wide as a microfacet one of width α)
+from ..scene.materials import Dielectric, phong_exponent  # (phong_exponent: the Phong lobe as wide as a GGX one)
 from .gltf_materials import shininess
 from .mitsuba_data import CONDUCTORS, IORS, conductor_reflectance, named_ior, spectrum_rgb, uniform_spectrum_rgb
 from .mitsuba_xml import Node, Spectrum, Value, Where, find_file
@@ -275,15 +274,31 @@ def _diffuse(node: Node, ctx: Context) -> dict:
 
 
 def _dielectric(node: Node, ctx: Context) -> dict:
-    """A smooth dielectric: lumos's kt/ior glass (exact Fresnel in path; `fresnel: true` for whitted)."""
-    kt, _ = color(node, "specular_transmittance", 1.0, ctx)
-    return {"kt": [min(c, 1.0) for c in kt], "ior": ior(node), "fresnel": True}
+    """A smooth dielectric: lumos's `dielectric` with α 0 (int_ior and ext_ior, or `eta` as ior over 1; the
+    specular reflectance and transmittance as its two tints)."""
+    if "eta" in node.props:
+        inside, outside = node.float("eta"), 1.0
+    else:
+        inside, outside = _ior_value(node, "int_ior", "bk7"), _ior_value(node, "ext_ior", "air")
+    if inside == outside:
+        raise node.where.error(f"{node.label()}: int_ior and ext_ior are equal (no interface)")
+    tint, _ = color(node, "specular_reflectance", 1.0, ctx)
+    through, _ = color(node, "specular_transmittance", 1.0, ctx)
+    glass = {"ior": inside, "ext_ior": outside}
+    if any(c != 1.0 for c in tint):
+        glass["tint"] = [min(c, 1.0) for c in tint]
+    if any(c != 1.0 for c in through):
+        glass["transmit_tint"] = [min(c, 1.0) for c in through]
+    return {"dielectric": glass}
 
 
 def _roughdielectric(node: Node, ctx: Context) -> dict:
-    ctx.warn(("bsdf", node.type), node.where, f"roughdielectric: read as a smooth dielectric (alpha "
-             f"{_alpha(node, ctx):g} not read) until lumos has microfacet materials")
-    return _dielectric(node, ctx)
+    """A rough dielectric: lumos's `dielectric` with Mitsuba's α (or [αu, αv]); GGX, so Mitsuba's default
+    Beckmann lobe is read as GGX of the same α (a warning); `sample_visible` is not read (lumos always samples
+    the visible normals)."""
+    material = _dielectric(node, ctx)
+    material["dielectric"]["alpha"] = _ggx_alpha(node, ctx)
+    return material
 
 
 def _thindielectric(node: Node, ctx: Context) -> dict:
@@ -326,6 +341,13 @@ def _roughconductor(node: Node, ctx: Context) -> dict:
     """A rough metal: lumos's `conductor` with Mitsuba's α (GGX; Mitsuba's default Beckmann lobe is read as the
     GGX lobe of the same α, a little narrower in its tails)."""
     material = _conductor(node, ctx)
+    material["conductor"]["alpha"] = _ggx_alpha(node, ctx)
+    return material
+
+
+def _ggx_alpha(node: Node, ctx: Context):
+    """A rough plugin's `alpha` (or `alpha_u`/`alpha_v`, default 0.1) as lumos's: one number or [αu, αv], each
+    at most 1; Mitsuba's default Beckmann distribution is read as GGX of the same α (a warning per plugin)."""
     if "alpha_u" in node.props or "alpha_v" in node.props:
         alpha = [scalar(node, "alpha_u", 0.1, ctx), scalar(node, "alpha_v", 0.1, ctx)]
     else:
@@ -337,8 +359,7 @@ def _roughconductor(node: Node, ctx: Context) -> dict:
     if distribution != "ggx":
         ctx.warn(("distribution", node.type), node.where, f"{node.type}: the {distribution} distribution is "
                  f"read as GGX of the same alpha (lumos's microfacet lobe)")
-    material["conductor"]["alpha"] = alpha[0] if alpha[0] == alpha[1] else alpha
-    return material
+    return alpha[0] if alpha[0] == alpha[1] else alpha
 
 
 def _plastic(node: Node, ctx: Context) -> dict:
@@ -422,7 +443,11 @@ def _blendbsdf(node: Node, ctx: Context) -> Optional[dict]:
 
 def _classic(material: dict) -> dict:
     """A material's classic coefficients: a `conductor` as its head-on reflectance F0, a mirror `kr` (α below
-    0.01) or a Phong lobe `ks` as wide as its GGX lobe (as lumos's local methods read one)."""
+    0.01) or a Phong lobe `ks` as wide as its GGX lobe (as lumos's local methods read one); a `dielectric` as
+    `Dielectric.classic`."""
+    if "dielectric" in material:  # glass: its classic reading (kt, ior, fresnel, a highlight)
+        return {**Dielectric(**material["dielectric"]).classic(), **{k: v for k, v in material.items()
+                                                                     if k != "dielectric"}}
     metal = material.get("conductor")
     if metal is None:
         return material

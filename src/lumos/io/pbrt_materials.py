@@ -1,11 +1,11 @@
-"""pbrt-v4 materials as lumos materials: `conductor` and `coateddiffuse` as lumos's microfacet `conductor` and
-`plastic`, the others as the classic coefficients (kd, ks + shininess, kr, kt + ior).
+"""pbrt-v4 materials as lumos materials: `conductor`, `dielectric` and `coateddiffuse` as lumos's microfacet
+`conductor`, `dielectric` and `plastic`, the others as the classic coefficients (kd, ks + shininess, kr, kt + ior).
 
     spec = MaterialSpec("coateddiffuse", params, where)
     lumos_material(spec, ctx, named)       # {"kd": ..., "plastic": {...}, "texture": [...]} (scene-format keys)
 
 pbrt-v4's roughness r is the Trowbridge–Reitz α = √r (α = r with `"bool remaproughness" false`). Where lumos has
-no microfacet material (rough glass, a conductor given by its reflectance), a rough surface is a Phong lobe of
+no microfacet material (a conductor given by its reflectance), a rough surface is a Phong lobe of
 the same width: glTF's mapping (`gltf_materials.shininess`, Beckmann α, Walter et al. 2007). One function per
 material type (`_diffuse`, `_conductor`…); each stand-in warns once per type. The table is in docs/formats.md
 ("pbrt-v4 scenes").
@@ -20,7 +20,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import pbrt_spectra as spectra
-from ..scene.materials import METALS
+from ..scene.materials import METALS, Dielectric
 from .gltf_materials import shininess
 from .pbrt_textures import Context, Tex, color, grey, samples, scalar, texture_ref, tidy
 from .pbrt_tokens import Params, Where
@@ -229,16 +229,27 @@ def _conductor_index(ps: Params, ctx: Context) -> Optional[dict]:
     return None
 
 
-def _conductor(ps: Params, ctx: Context, where: Where) -> dict:
-    """lumos's `conductor` (GGX, the exact Fresnel factor of η + ik) where its index can be given; else the
-    head-on reflectance as a mirror or a Phong lobe."""
+def _alphas(ps: Params, ctx: Context) -> tuple[float, float]:
+    """The Trowbridge–Reitz (αu, αv) of a material's roughness, each at most 1 (lumos's widest)."""
     rough = scalar(ps, "roughness", ctx, 0.0)
     u, v = scalar(ps, "uroughness", ctx, rough), scalar(ps, "vroughness", ctx, rough)
     remap = ps.bool("remaproughness", True)
     au, av = (min(math.sqrt(max(r, 0.0)) if remap else max(r, 0.0), 1.0) for r in (u, v))
+    return au, av
+
+
+def _alpha_key(au: float, av: float):
+    """A lumos `alpha`: one number, or [αu, αv] when they differ."""
+    return tidy(au, 6) if au == av else [tidy(au, 6), tidy(av, 6)]
+
+
+def _conductor(ps: Params, ctx: Context, where: Where) -> dict:
+    """lumos's `conductor` (GGX, the exact Fresnel factor of η + ik) where its index can be given; else the
+    head-on reflectance as a mirror or a Phong lobe."""
+    au, av = _alphas(ps, ctx)
     index = _conductor_index(ps, ctx)
     if index is not None:
-        return {"conductor": {**index, "alpha": tidy(au, 6) if au == av else [tidy(au, 6), tidy(av, 6)]}}
+        return {"conductor": {**index, "alpha": _alpha_key(au, av)}}
     out: dict = {}
     if max(au, av) > 1e-4:
         ctx.warn.once(("material", "conductor", "rough"), where, "Material 'conductor' with roughness and a "
@@ -263,11 +274,15 @@ def _coatedconductor(ps: Params, ctx: Context, where: Where) -> dict:
 
 
 def _dielectric(ps: Params, ctx: Context, where: Where) -> dict:
+    """lumos's `dielectric` (GGX reflection and refraction, Walter et al. 2007; smooth below pbrt's α of 10⁻³, as
+    its EffectivelySmooth); η = 1, pbrt's index-matched interface, passes light straight through."""
     eta = _eta(ps, ctx, "eta", 1.5)
-    if _alpha(ps, ctx) > 1e-4:
-        ctx.warn.once(("material", "dielectric", "rough"), where, "Material 'dielectric' with roughness: smooth glass "
-                      "of the same ior stands in")
-    return {"kt": 1.0, "ior": tidy(eta, 6), "fresnel": True}
+    if eta == 1.0:
+        return {"kt": 1.0, "ior": 1.0}
+    au, av = _alphas(ps, ctx)
+    if max(au, av) < 1e-3:
+        au = av = 0.0
+    return {"dielectric": {"ior": tidy(eta, 6), "alpha": _alpha_key(au, av)}}
 
 
 def _thindielectric(ps: Params, ctx: Context, where: Where) -> dict:
@@ -313,7 +328,10 @@ def _mix(spec: MaterialSpec, ctx: Context, named: dict, depth: int) -> dict:
         if name not in named:
             raise p.where.error(f"Material 'mix': unknown named material '{name}' (defined: "
                                 f"{', '.join(sorted(named)) or 'none'})")
-        parts.append(lumos_material(named[name], ctx, named, depth + 1))
+        part = lumos_material(named[name], ctx, named, depth + 1)
+        if "dielectric" in part:  # its classic reading (kt, ior, a highlight), which mixes coefficient-wise
+            part = {**Dielectric(**part.pop("dielectric")).classic(), **part}
+        parts.append(part)
     weights = (1.0 - amount, amount)
     out: dict = {}
     for key in ("kd", "ks", "kr", "kt", "emission"):

@@ -12,6 +12,9 @@ A metal (MODEL_CONDUCTOR) replaces the Phong lobe by a GGX microfacet lobe with 
 lobe (or the mirror lobe) with the dielectric's Fresnel factor, and the base's light is what the coat lets in and
 out, t(cos θi)·t(cos θo)·kd/(π·η²·(1 − Fdr)), t = 1 − the coat's directional reflectance and Fdr its internal
 diffuse reflectance (the tables `compile.plastic` writes into the row), as Mitsuba 3's `roughplastic` reads it.
+Glass (MODEL_DIELECTRIC) is one lobe: when rough, the glossy one (ks = 1), GGX reflection and refraction
+(`microfacet.eval_ggx_dielectric`, Walter et al. 2007) on both sides of the surface, times its reflected or
+transmitted tint; when smooth, the dielectric one (kt = 1) with its own indices and tints (`methods.path_trace`).
 The functions take the material row `mat` for these parameters.
 
 The first two are the smooth part (`eval_smooth`); the last two are delta lobes, reached only by sampling.
@@ -35,11 +38,21 @@ from .layout import (
     MAT_K,
     MAT_MODEL,
     MAT_SHININESS,
+    MAT_TINT,
+    MAT_TINT_T,
     MODEL_CLASSIC,
     MODEL_CONDUCTOR,
+    MODEL_DIELECTRIC,
     MODEL_PLASTIC,
 )
-from .microfacet import eval_ggx, fresnel_conductor, sample_ggx
+from .microfacet import (
+    eval_ggx,
+    eval_ggx_dielectric,
+    fresnel_conductor,
+    fresnel_dielectric,
+    sample_ggx,
+    sample_ggx_dielectric,
+)
 from .sampling import turn
 from .vec import dot, madd, mul, orthonormal_basis
 
@@ -105,17 +118,46 @@ def mirror(wo, n):
 
 
 @njit_inline
-def eval_smooth(kd, ks, mat, p_d, p_s, n, wo, wi):
+def relative_eta(mat, entering):
+    """η = n_t/n_i across a dielectric's surface (MODEL_DIELECTRIC) for a ray arriving from outside (entering)
+    or from inside: its int_ior/ext_ior or the inverse; 1 for the other models (not read by them)."""
+    if mat[MAT_MODEL] != MODEL_DIELECTRIC:
+        return 1.0
+    return mat[MAT_ETA] if entering else 1.0 / mat[MAT_ETA]
+
+
+@njit
+def eval_dielectric(kd, ks, mat, p_d, p_s, eta, n, wo, wi):
+    """`eval_smooth` for a rough dielectric: its GGX reflection and refraction (`microfacet.eval_ggx_dielectric`)
+    times ks and the reflected or transmitted tint, on either side of the surface; kd/π above it. (Called, not
+    inlined: the lobes of the other models stay small where they are inlined.)"""
+    g, pdf_g, through = eval_ggx_dielectric(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], eta, n, wo, wi)
+    tint = MAT_TINT_T if through else MAT_TINT
+    fs = (ks[0] * mat[tint] * g, ks[1] * mat[tint + 1] * g, ks[2] * mat[tint + 2] * g)
+    pdf = p_s * pdf_g
+    fd = (0.0, 0.0, 0.0)
+    cos_i = dot(n, wi)
+    if cos_i > 0.0 and p_d > 0.0:
+        fd = (kd[0] * _INV_PI, kd[1] * _INV_PI, kd[2] * _INV_PI)
+        pdf += p_d * cos_i * _INV_PI
+    return fd, fs, pdf
+
+
+@njit_inline
+def eval_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, wi):
     """The smooth part of the BSDF for the pair (wo, wi): (f_diffuse rgb, f_glossy rgb, pdf of wi).
 
     f_diffuse = kd/π (under a plastic's coat, times what the coat lets through) and f_glossy =
     ks·(n+2)/(2π)·cosⁿα (n the row's shininess), or ks times a metal's or a coat's GGX lobe, both 0 where wi is
     below the surface (n·wi <= 0); pdf is the mixture p_d·cosθ/π + p_s·pdf_glossy with which `sample_cosine` and
-    `sample_phong` (or `microfacet.sample_ggx`) draw wi."""
+    `sample_phong` (or `microfacet.sample_ggx`) draw wi. A rough dielectric's lobe reaches below the surface too
+    (`eval_dielectric`; eta = n_t/n_i from wo's side, `relative_eta`, read by it alone)."""
+    model = mat[MAT_MODEL]
+    if model == MODEL_DIELECTRIC:
+        return eval_dielectric(kd, ks, mat, p_d, p_s, eta, n, wo, wi)
     cos_i = dot(n, wi)
     if cos_i <= 0.0:
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0
-    model = mat[MAT_MODEL]
     pdf = p_d * cos_i * _INV_PI
     c = _INV_PI
     if model == MODEL_PLASTIC:  # the light the coat lets in and out, and the base's inter-reflection under it
@@ -166,36 +208,28 @@ def sample_phong(axis, exponent, u1, u2):
 
 
 @njit_inline
-def sample_smooth(kd, ks, mat, p_d, p_s, n, wo, u_lobe, u1, u2):
+def sample_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, u_lobe, u1, u2):
     """A direction from the smooth part of the BSDF: the diffuse lobe when u_lobe < p_d, else the glossy lobe
-    (u_lobe < p_d + p_s: Phong about the mirror direction, or the visible GGX normals of a metal or a coat), with
-    the mixture pdf of `eval_smooth`. Returns (wi, f·cos/pdf as rgb, pdf); pdf = 0 when the direction falls below
-    the surface (the lobe reaches past it)."""
+    (u_lobe < p_d + p_s: Phong about the mirror direction, or the visible GGX normals of a metal, a coat or a
+    rough dielectric, which reflects or refracts by (u_lobe − p_d)/p_s), with the mixture pdf of `eval_smooth`.
+    Returns (wi, f·|cos|/pdf as rgb, pdf); pdf = 0 when the direction falls below the surface (the lobe reaches
+    past it; a dielectric's refraction is below it, its reflection must not be)."""
+    model = mat[MAT_MODEL]
     if u_lobe < p_d:
         wi = sample_cosine(n, u1, u2)
-    elif mat[MAT_MODEL] != MODEL_CLASSIC:
+    elif model == MODEL_DIELECTRIC:
+        wi, ok = sample_ggx_dielectric(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], eta, n, wo, (u_lobe - p_d) / p_s, u1, u2)
+        if not ok:
+            return wi, (0.0, 0.0, 0.0), 0.0
+    elif model != MODEL_CLASSIC:
         wi = sample_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, u1, u2)
     else:
         wi = sample_phong(mirror(wo, n), mat[MAT_SHININESS], u1, u2)
-    fd, fs, pdf = eval_smooth(kd, ks, mat, p_d, p_s, n, wo, wi)
+    fd, fs, pdf = eval_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, wi)
     if not pdf > 0.0:
         return wi, (0.0, 0.0, 0.0), 0.0
-    k = dot(n, wi) / pdf
+    k = abs(dot(n, wi)) / pdf
     return wi, ((fd[0] + fs[0]) * k, (fd[1] + fs[1]) * k, (fd[2] + fs[2]) * k), pdf
-
-
-@njit
-def fresnel_dielectric(cos_i, eta):
-    """Unpolarised Fresnel reflectance of a smooth dielectric interface and the cosine of the refracted ray:
-    (F, cos_t), with eta = n_incident / n_transmitted and cos_i >= 0 on the incident side (Born & Wolf; F = 1
-    and cos_t = 0 under total internal reflection)."""
-    sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i)
-    if sin2_t >= 1.0:
-        return 1.0, 0.0
-    cos_t = math.sqrt(1.0 - sin2_t)
-    rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
-    rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
-    return 0.5 * (rs * rs + rp * rp), cos_t
 
 
 @njit

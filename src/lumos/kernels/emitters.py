@@ -1,11 +1,17 @@
 """Light sampling for the path tracer: pick an emitter by power, sample a point on it, and the solid-angle pdf
 of a direction that reaches it (for multiple importance sampling).
 
-    wi, dist, le_d, le_s, pdf, delta = sample_emitter(em, lit, surf, p, u_pick, u1, u2, time)
-    pdf = emitter_pdf(em, lit, surf, entry, p, y, wi, dist, n_geo, part, time)
+    wi, dist, le_d, le_s, pdf, delta = sample_emitter(em, lit, surf, p, n, u_pick, u1, u2, time)
+    pdf = emitter_pdf(em, lit, surf, entry, p, n, wi, dist, n_geo, ref, part, time)
+    e, pmf = select_emitter(em, p, n, u_pick);  pmf = selection_pmf(em, e, p, n)
 
-`em` is a `layout.Emitters` table (`compile.emitters`), `lit` and `surf` the `Lighting` and `Surfaces` views.
-The pdfs include the probability of picking the entry. Area lights use the routines of the classic model
+`em` is a `layout.Emitters` table (`compile.emitters`), `lit` and `surf` the `Lighting` and `Surfaces` views;
+p is the shading point and n its unit shading normal. The pdfs include the probability of picking the entry:
+by the light tree (`kernels.light_tree`), which weighs each emitter by its estimated contribution at (p, n), or,
+with `light_selection: power` (no tree in the table), by power alone. Light sampling and the MIS weight of an
+emitter found by a BSDF ray call the same `selection_pmf`, so they agree.
+
+Area lights use the routines of the classic model
 (`illumination.sample_light`): its weight w for an area light is the equivalent-intensity factor cosθ_y·A/(π·d²)
 (or Ω/π for a sphere), which is 1/(π·pdf) with pdf the solid-angle density of its sample. Delta lights (point,
 spot, directional) return their irradiance factor instead (DESIGN.md §3: E = π·I·cosθ/att(d)) with delta = True.
@@ -26,6 +32,7 @@ from .. import config
 from .environment import env_radiance, env_sample
 from .illumination import sample_light, sphere_cone, sphere_cone_solid_angle
 from .jit import njit, njit_inline
+from .light_tree import tree_pick, tree_pmf
 from .layout import (
     EMIT_ENV,
     EMIT_LIGHT,
@@ -72,6 +79,31 @@ def pick_emitter(em, u):
         else:
             lo = mid + 1
     return lo
+
+
+@njit_inline
+def _by_tree(em):
+    """True when the table has a light tree (`light_selection: tree`), False when it picks by power."""
+    return em.tree_nodes.shape[0] > 0 or em.emit_unbounded.shape[0] > 0
+
+
+@njit_inline
+def select_emitter(em, p, n, u):
+    """(entry, its probability) for the shading point p with unit normal n from u ∈ [0, 1); (-1, 0.0): none."""
+    if _by_tree(em):
+        return tree_pick(em, p, n, u)
+    e = pick_emitter(em, u)
+    if e < 0:
+        return np.int64(-1), 0.0
+    return np.int64(e), em.emit_pmf[e]
+
+
+@njit_inline
+def selection_pmf(em, e, p, n):
+    """The probability that `select_emitter` at (p, n) picks entry e."""
+    if _by_tree(em):
+        return tree_pmf(em, e, p, n)
+    return em.emit_pmf[e]
 
 
 @njit
@@ -138,18 +170,17 @@ def _shape_density(em, surf, e, s, part, n_canonical):
 
 
 @njit_inline
-def sample_emitter(em, lit, surf, p, u_pick, u1, u2, time):
-    """One light sample for the point p: (wi, dist, le_d, le_s, pdf, delta).
+def sample_emitter(em, lit, surf, p, n, u_pick, u1, u2, time):
+    """One light sample for the point p with unit shading normal n: (wi, dist, le_d, le_s, pdf, delta).
 
     wi is the unit direction to the sampled point at distance dist (T_FAR-like for directional lights); le_d and
     le_s the radiance that reaches p along wi before the BSDF (for delta lights: the irradiance factor π·I/att,
     split into the diffuse Id and specular Is of the classic model); pdf the density of the sample (solid angle,
     times the probability of picking the emitter; for delta lights the probability alone). pdf = 0: no sample.
     """
-    e = pick_emitter(em, u_pick)
-    if e < 0:
+    e, pmf = select_emitter(em, p, n, u_pick)
+    if not pmf > 0.0:
         return _NO_SAMPLE
-    pmf = em.emit_pmf[e]
     kind = em.emit_kind[e]
     ref = em.emit_ref[e]
     if kind == EMIT_LIGHT:
@@ -222,12 +253,16 @@ def sample_emitter(em, lit, surf, p, u_pick, u1, u2, time):
 
 
 @njit_inline
-def emitter_pdf(em, lit, surf, e, p, wi, dist, n_geo, ref, part, time):
-    """The density (solid angle at p, times the probability of picking entry e) with which `sample_emitter`
-    would have drawn the direction wi that reaches, at distance dist, the point of emitter entry e with
-    geometric unit normal n_geo (hit record ref, part); 0 for delta lights."""
-    pmf = em.emit_pmf[e]
+def emitter_pdf(em, lit, surf, e, p, n, wi, dist, n_geo, ref, part, time):
+    """The density (solid angle at p, times the probability of picking entry e at p with unit shading normal n)
+    with which `sample_emitter` would have drawn the direction wi that reaches, at distance dist, the point of
+    emitter entry e with geometric unit normal n_geo (hit record ref, part); 0 for delta lights."""
     kind = em.emit_kind[e]
+    if kind == EMIT_LIGHT and lit.light_kind[em.emit_ref[e]] <= LIGHT_DIRECTIONAL:
+        return 0.0
+    pmf = selection_pmf(em, e, p, n)
+    if not pmf > 0.0:
+        return 0.0
     r = em.emit_ref[e]
     if kind == EMIT_LIGHT:
         lk = lit.light_kind[r]

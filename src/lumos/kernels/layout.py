@@ -50,13 +50,15 @@ MAT_TEXTURE_COUNT = 23  # how many tex_info rows from MAT_TEXTURE are its textur
 MAT_CUTOUT = 24  # 1.0: one of its textures applies to opacity, so its surfaces may have holes (kernels.cutout)
 MAT_ONE_SIDED = 25  # 1.0: its emission leaves the front only (the side the geometric normal faces); it reflects on both
 # The physical model the path tracer reads (the columns above are the classic model's, which the local methods
-# read; for a conductor the compile step derives them from these): MODEL_CLASSIC or MODEL_CONDUCTOR
+# read; for a conductor the compile step derives them from these): MODEL_CLASSIC, MODEL_CONDUCTOR, ...
 MAT_MODEL = 26
 MAT_ALPHA = 27  # GGX widths (αu, αv) along the tangent frame's two axes (`kernels.microfacet`)
 MAT_ETA = 29  # conductor: the real part of the complex index of refraction, per channel (0: a perfect reflector);
-# plastic: MAT_ETA alone, the coat's index (inside over outside)
+# plastic: MAT_ETA alone, the coat's index (inside over outside); dielectric: MAT_ETA alone, int_ior / ext_ior
 MAT_K = 32  # conductor: its imaginary part (extinction), per channel
-MAT_TINT = 35  # conductor, plastic: a factor on the lobe's reflectance per channel (Mitsuba's specular_reflectance)
+MAT_TINT_T = 32  # dielectric (no k): a factor on the transmitted light per channel (Mitsuba's specular_transmittance)
+MAT_TINT = 35  # conductor, plastic, dielectric: a factor on the lobe's reflectance per channel (Mitsuba's
+# specular_reflectance)
 MAT_FDR = 38  # plastic: the coat's internal diffuse reflectance (light from the base sent back down to it)
 # plastic: MAT_COAT_SIZE values of t(cos θ) = 1 − the coat's directional reflectance, at cos θ = i/(size − 1)
 MAT_COAT = 39
@@ -66,6 +68,7 @@ MAT_SIZE = MAT_COAT + MAT_COAT_SIZE
 MODEL_CLASSIC = 0  # kd, ks/shininess, kr, kt read as kernels.bsdf says
 MODEL_CONDUCTOR = 1  # a metal: GGX microfacets (a mirror when α = 0) with the Fresnel factor of η + ik
 MODEL_PLASTIC = 2  # kd under a dielectric coat of index MAT_ETA: GGX microfacets (a mirror when α = 0)
+MODEL_DIELECTRIC = 3  # glass of relative index MAT_ETA: GGX reflection and refraction (smooth glass when α = 0)
 
 # The ambient light Ia (SceneArrays.ambient): a constant (row 0) plus, with an environment and no `ambient` given,
 # its irradiance E(n)/π in the nine real spherical harmonics of bands 0-2 (Ramamoorthi & Hanrahan 2001: the
@@ -114,6 +117,20 @@ ENV_HEIGHT = 4
 ENV_ENTRY = 5  # its entry in the emitter table (−1: none)
 ENV_INFO_SIZE = 6
 EMIT_PARTS = 6  # columns of emit_parts: one probability per part (face) of a shape
+# The light tree (`kernels.light_tree`, built by `compile.light_tree`): Emitters.tree_nodes float64 columns, one
+# pbrt LightBounds per node
+TREE_MIN = 0  # bounding box min xyz
+TREE_MAX = 3  # and max xyz
+TREE_W = 6  # the unit axis of the cone bounding the emitters' normals
+TREE_PHI = 9  # summed power (> 0)
+TREE_COS_O = 10  # cos θo: the normal cone's half-angle (-1: every direction)
+TREE_COS_E = 11  # cos θe: how far beyond its normal an emitter still emits (0: π/2, an area emitter)
+TREE_TWO_SIDED = 12  # 1.0: one of them emits on both sides of its normal
+TREE_SIZE = 13
+# Emitters.tree_link int32 columns
+TREE_FIRST = 0  # first child (the second is the next node), -1 for a leaf
+TREE_ITEM = 1  # a leaf's emitter entry, else -1
+TREE_PARENT = 2  # -1 for the root
 
 # Camera: cam_vecs float64 (4, 3) = position, u, v, w; cam_params float64 (CAM_SIZE,)
 CAM_ORTHO = 0  # 1.0 for orthographic
@@ -233,6 +250,13 @@ Emitters = namedtuple(
         "env_marginal",  # float64 (H + 1,): CDF over its rows (compile.environment)
         "env_conditional",  # float64 (H, W + 1): CDF over each row's pixels
         "env_info",  # float64 (ENV_INFO_SIZE,): present, cos and sin of its rotation, W, H, its entry
+        # light selection (`kernels.emitters.select_emitter`): by the light tree where these are not both empty,
+        # else by power (emit_cdf)
+        "tree_nodes",  # float64 (nn, TREE_SIZE): the light tree's nodes, see TREE_*
+        "tree_link",  # int32 (nn, 3): its links, see TREE_FIRST..
+        "emit_node",  # int32 (ne,): each entry's leaf in the tree; -2: picked outside it; -1: never picked
+        "emit_unbounded",  # int32 (nu,): the entries picked outside the tree (directional, environment...)
+        "unbounded_cdf",  # float64 (nu,): cumulative probability of picking them (the last: all of them together)
     ],
 )
 #: Radiosity's patches (`compile.patches`), as the solvers' kernels read them (`kernels.radiosity`).

@@ -1,5 +1,6 @@
-"""Microfacet reflection for the path tracer: the GGX (Trowbridge–Reitz) distribution of normals, Smith's masking,
-sampling of the visible normals, and the Fresnel factor of a conductor.
+"""Microfacet reflection and refraction for the path tracer: the GGX (Trowbridge–Reitz) distribution of normals,
+Smith's masking, sampling of the visible normals, the Fresnel factors of a conductor and of a dielectric, and the
+rough dielectric's two lobes (`eval_ggx_dielectric`, after Walter et al. 2007).
 
     D(h)  = 1 / (π·αu·αv·((hx/αu)² + (hy/αv)² + hz²)²)          h in the local frame (t, b, n), hz = cos θh
     Λ(w)  = (−1 + sqrt(1 + (αu²·wx² + αv²·wy²)/wz²)) / 2         G1(w, h) = 1/(1 + Λ(w)) where w·h and wz agree
@@ -40,6 +41,20 @@ def fresnel_conductor(cos_i, eta, k):
     t4 = t2 * s2
     rp = rs * (t3 - t4) / (t3 + t4)
     return 0.5 * (rs + rp)
+
+
+@njit
+def fresnel_dielectric(cos_i, eta):
+    """Unpolarised Fresnel reflectance of a smooth dielectric interface and the cosine of the refracted ray:
+    (F, cos_t), with eta = n_incident / n_transmitted and cos_i >= 0 on the incident side (Born & Wolf; F = 1
+    and cos_t = 0 under total internal reflection)."""
+    sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i)
+    if sin2_t >= 1.0:
+        return 1.0, 0.0
+    cos_t = math.sqrt(1.0 - sin2_t)
+    rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    return 0.5 * (rs * rs + rp * rp), cos_t
 
 
 @njit
@@ -126,3 +141,72 @@ def sample_ggx(au, av, n, wo, u1, u2):
     k = 2.0 * (ox * hx + oy * hy + oz * hz)
     lx, ly, lz = k * hx - ox, k * hy - oy, k * hz - oz
     return (lx * t[0] + ly * b[0] + lz * n[0], lx * t[1] + ly * b[1] + lz * n[1], lx * t[2] + ly * b[2] + lz * n[2])
+
+
+@njit_inline
+def _to_world(x, y, z, t, b, n):
+    return (x * t[0] + y * b[0] + z * n[0], x * t[1] + y * b[1] + z * n[1], x * t[2] + y * b[2] + z * n[2])
+
+
+@njit
+def eval_ggx_dielectric(au, av, eta, n, wo, wi):
+    """The rough dielectric's lobes for the pair (wo, wi) about the shading normal n (wo's side), after Walter et
+    al. 2007 as Mitsuba 3's `roughdielectric` reads them in radiance mode; eta = n_t/n_i, the index on the far
+    side over the index on wo's side. Returns (f without tint, the pdf of wi under `sample_ggx_dielectric`,
+    whether wi is transmitted (below the surface)):
+
+        reflection (cos θi > 0)   h = (wo + wi)/|…|       f = F·D·G/(4·cos θo·cos θi)    pdf = F·G1(wo)·D/(4·cos θo)
+        refraction (cos θi < 0)   h = ±(wo + η·wi)/|…|    f = (1 − F)·D·G·|wi·h|·(wo·h)/(cos θo·|cos θi|·(wo·h + η·wi·h)²)
+                                                          pdf = (1 − F)·G1(wo)·D·(wo·h)/cos θo · η²·|wi·h|/(wo·h + η·wi·h)²
+
+    F = F(wo·h) the dielectric Fresnel factor, G = G1(wo)·G1(wi) (Smith, separable), h turned to n's side. The
+    refracted f is Walter's eq. 21 with η_o² (the index on the viewer's side) over the squared sum: radiance
+    compressed by (n_i/n_t)² (Mitsuba's 1/η² factor in radiance mode), so f(wo, wi)/n_o² = f(wi, wo)/n_i²."""
+    t, b = orthonormal_basis(n)
+    ox, oy, oz = local(wo, t, b, n)
+    ix, iy, iz = local(wi, t, b, n)
+    if oz <= 0.0 or iz == 0.0:
+        return 0.0, 0.0, False
+    through = iz < 0.0
+    e = eta if through else 1.0
+    hx, hy, hz = ox + e * ix, oy + e * iy, oz + e * iz
+    length = math.sqrt(hx * hx + hy * hy + hz * hz)
+    if not length > 0.0:
+        return 0.0, 0.0, through
+    inv = 1.0 / length if hz >= 0.0 else -1.0 / length
+    hx, hy, hz = hx * inv, hy * inv, hz * inv
+    o_h = ox * hx + oy * hy + oz * hz
+    i_h = ix * hx + iy * hy + iz * hz
+    g1o = smith_g1(ox, oy, oz, o_h, au, av)  # 0 where wo or wi sees the back of h
+    g = g1o * smith_g1(ix, iy, iz, i_h, au, av)
+    if not g > 0.0:
+        return 0.0, 0.0, through
+    d = ggx_d(hx, hy, hz, au, av)
+    F = fresnel_dielectric(o_h, 1.0 / eta)[0]
+    if not through:
+        return F * d * g / (4.0 * oz * iz), F * g1o * d / (4.0 * oz), False
+    s = o_h + eta * i_h
+    jacobian = eta * eta * abs(i_h) / (s * s)  # |dh/dwi| of refraction (Walter's eq. 17)
+    return ((1.0 - F) * d * g * abs(i_h) * o_h / (oz * -iz * s * s), (1.0 - F) * g1o * d * o_h / oz * jacobian,
+            True)
+
+
+@njit
+def sample_ggx_dielectric(au, av, eta, n, wo, u, u1, u2):
+    """A direction from the rough dielectric: a microfacet normal h visible from wo (u1, u2), then reflection
+    about h with probability F(wo·h) (u < F), else refraction through it (eta = n_t/n_i). Returns (wi, ok):
+    ok is False where the choice leaves its own side of the surface (a reflection below it, a refraction above),
+    which `eval_ggx_dielectric` counts as the other lobe: such a sample is dropped, as Mitsuba drops it."""
+    t, b = orthonormal_basis(n)
+    ox, oy, oz = local(wo, t, b, n)
+    hx, hy, hz = sample_visible_normal(ox, oy, max(oz, 1e-9), au, av, u1, u2)
+    o_h = ox * hx + oy * hy + oz * hz
+    F, cos_t = fresnel_dielectric(max(o_h, 0.0), 1.0 / eta)
+    if u < F:
+        k = 2.0 * o_h
+        lx, ly, lz = k * hx - ox, k * hy - oy, k * hz - oz
+        return _to_world(lx, ly, lz, t, b, n), lz > 0.0
+    r = 1.0 / eta  # Snell about h: −wo/η + (o_h/η − cos_t)·h
+    k = r * o_h - cos_t
+    lx, ly, lz = k * hx - r * ox, k * hy - r * oy, k * hz - r * oz
+    return _to_world(lx, ly, lz, t, b, n), lz < 0.0

@@ -19,7 +19,7 @@ def compile_for(scene, settings, solved: bool = False, reuse=None):
     if settings.method == "path":
         from ..compile import emitters
 
-        emitters.attach(compiled)
+        emitters.attach(compiled, settings.light_selection)
     elif settings.method == "radiosity":
         from ..compile import patches
 

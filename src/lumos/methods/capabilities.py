@@ -22,6 +22,7 @@ PATH_ONLY = (
     ("denoise", lambda s: s.denoise, "--denoise"),
     ("sampling", lambda s: s.sampling != "mis", "--sampling"),
     ("sampler", lambda s: s.sampler != "sobol", "--sampler"),
+    ("light_selection", lambda s: s.light_selection != "tree", "--light-selection"),
 )
 
 #: The methods that compute the classic model's terms (the term AOVs); the others compute global illumination.

@@ -5,8 +5,8 @@ illumination of the chapter's section 3.3 — light reflected from other surface
 
 Each sample follows one path: at every vertex it adds the light reached directly by two strategies, combined by
 multiple importance sampling with the power heuristic (Veach & Guibas 1995):
-- next-event estimation: an emitter picked in proportion to its power (`kernels.emitters`), a point on it, and a
-  shadow ray; delta lights (point, directional) are only reached this way;
+- next-event estimation: an emitter picked by its estimated contribution at the vertex (the light tree,
+  `kernels.light_tree`; or by power alone, `light_selection: power`), a point on it, and a shadow ray; delta lights (point, directional) are only reached this way;
 - BSDF sampling: the direction the path continues in, whose hit adds the emission it finds.
 The path continues with the BSDF sample; after `RR_DEPTH` bounces Russian roulette ends it with probability
 1 − q, q = min(max throughput × η², 0.95), and reweights the survivors by 1/q (unbiased). `max_depth` D counts
@@ -17,8 +17,9 @@ Materials are read physically (`kernels.bsdf`): kd Lambertian, ks/shininess a no
 a `conductor` a GGX microfacet lobe with the complex Fresnel factor (`kernels.microfacet`), a `plastic` kd under a
 clear coat (GGX lobe with the dielectric Fresnel factor over the base seen through it), kt/ior a smooth
 dielectric with exact Fresnel (nested media as in whitted; a transparent surface that is not a
-solid is a thin sheet that lets kt through unbent). ka and the scene's ambient are ignored. Shadow rays stop at
-every surface: light through glass (caustics) is found by BSDF sampling alone.
+solid is a thin sheet that lets kt through unbent), a `dielectric` GGX reflection and refraction (Walter et al.
+2007; light sampled on both sides of it; smooth at α = 0). ka and the scene's ambient are ignored. Shadow rays
+stop at every surface: light through glass (caustics) is found by BSDF sampling alone.
 
 `pass_rows` adds samples [s0, s1) of every pixel of a band of rows, in sample order, to float64 buffers. Every
 random number is a function of (seed, pixel, sample, dimension), so a pixel's samples are the same whoever draws
@@ -39,13 +40,14 @@ from ..kernels.bsdf import (
     mirror,
     power_heuristic,
     power_heuristic_over,
+    relative_eta,
     sample_dielectric,
     sample_smooth,
     surface_fresnel,
 )
 from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit, occluded
-from ..kernels.emitters import emitter_pdf, sample_emitter
+from ..kernels.emitters import emitter_pdf, sample_emitter, selection_pmf
 from ..kernels.environment import env_pdf, env_radiance
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
@@ -58,7 +60,10 @@ from ..kernels.layout import (
     MAT_KT,
     MAT_MODEL,
     MAT_ONE_SIDED,
+    MAT_TINT,
+    MAT_TINT_T,
     MODEL_CLASSIC,
+    MODEL_DIELECTRIC,
 )
 from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
 from ..kernels.sobol import pair_seed, sobol_block
@@ -183,6 +188,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
     prev_delta = True  # the camera ray, and rays from mirrors and glass, see emitters with full weight
     prev_pdf = 0.0
     prev_p = o
+    prev_n = (0.0, 0.0, 0.0)  # the previous vertex's shading normal: light selection there depends on it
     first_t = -1.0
     first_obj = -1
     albedo = (0.0, 0.0, 0.0)
@@ -196,7 +202,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         rays += 1
         t = hit[0]
         if t < 0.0:  # the background, or the environment (weighted against sampling it as a light)
-            bg, w = _missed(em, d, background, prev_delta, prev_pdf, mode)
+            bg, w = _missed(em, d, background, prev_p, prev_n, prev_delta, prev_pdf, mode)
             L0 += b0 * bg[0] * w
             L1 += b1 * bg[1] * w
             L2 += b2 * bg[2] * w
@@ -212,8 +218,8 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         # stage 2: emission found by the BSDF-sampled ray, weighted against light sampling
         le0, le1, le2 = le
         if (le0 > 0.0 or le1 > 0.0 or le2 > 0.0) and (entering or mat[MAT_ONE_SIDED] == 0.0):
-            w = _emission_weight(em, lit, surf, ref, light, hit[4], prev_p, d, t, n_geo, time, prev_delta, prev_pdf,
-                                 mode)
+            w = _emission_weight(em, lit, surf, ref, light, hit[4], prev_p, prev_n, d, t, n_geo, time, prev_delta,
+                                 prev_pdf, mode)
             L0 += b0 * le0 * w
             L1 += b1 * le1 * w
             L2 += b2 * le2 * w
@@ -248,7 +254,8 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         # first vertex's Sobol pair is in the sample's batch all the same; a later vertex's hash is saved)
         u_lobe = u_pick = 0.0
         lobes = (p_d > 0.0) + (p_s > 0.0) + (p_r > 0.0)
-        if p_t > 0.0 or lobes > 1 or em.emit_cdf.shape[0] > 1:
+        rough_glass = mat[MAT_MODEL] == MODEL_DIELECTRIC  # (u_lobe chooses its reflection or refraction too)
+        if p_t > 0.0 or lobes > 1 or em.emit_cdf.shape[0] > 1 or rough_glass:
             u_lobe, u_pick = _draw2(sampler, points, col, key, pair, dim)
         # stage 4: next-event estimation (the smooth lobes only: a mirror or glass cannot meet a light sample)
         if p_d + p_s > 0.0:
@@ -266,9 +273,15 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         u1, u2 = _draw2(sampler, points, col, key, pair + 1, dim + 2)
         p_smooth = p_d + p_s
         if u_lobe < p_smooth:
-            wi, (w0, w1, w2), pdf = sample_smooth(kd, ks, mat, p_d, p_s, n_s, wo, u_lobe, u1, u2)
-            if not pdf > 0.0 or n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] <= 0.0:
+            eta = relative_eta(mat, entering)
+            wi, (w0, w1, w2), pdf = sample_smooth(kd, ks, mat, p_d, p_s, eta, n_s, wo, u_lobe, u1, u2)
+            cos_g = n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2]
+            if not pdf > 0.0 or cos_g * (n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]) <= 0.0:
                 break
+            if cos_g < 0.0:  # refracted by a rough dielectric (w holds its 1/η²)
+                eta_scale *= eta * eta
+                if is_solid(surf, ref):
+                    n_media = _media_update(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
             prev_delta = False
             prev_pdf = pdf
         elif u_lobe < p_smooth + p_r:
@@ -302,13 +315,14 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         if depth >= MAX_BOUNCES:
             break
         prev_p = p
+        prev_n = n_s
         o = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
         d = wi
     return (L0, L1, L2), rays, first_t, first_obj, albedo, normal, (e0, e1, e2), (D0, D1, D2)
 
 
 @njit_inline
-def _missed(em, d, background, prev_delta, prev_pdf, mode):
+def _missed(em, d, background, prev_p, prev_n, prev_delta, prev_pdf, mode):
     """What a ray that leaves the scene along d finds: the environment's radiance there with its MIS weight against
     the environment's light samples (1 after the camera, a mirror or glass), or the background colour (weight 1)."""
     if em.env_info[ENV_PRESENT] == 0.0:
@@ -317,14 +331,15 @@ def _missed(em, d, background, prev_delta, prev_pdf, mode):
     e = np.int64(em.env_info[ENV_ENTRY])
     if prev_delta or mode == MODE_BSDF or e < 0:
         return le, 1.0
-    pdf_light = em.emit_pmf[e] * env_pdf(em, d)
+    pdf_light = selection_pmf(em, e, prev_p, prev_n) * env_pdf(em, d)
     if not pdf_light > 0.0:
         return le, 1.0
     return le, 0.0 if mode == MODE_LIGHT else power_heuristic(prev_pdf, pdf_light)
 
 
 @njit_inline
-def _emission_weight(em, lit, surf, ref, light, part, prev_p, d, t, n_geo, time, prev_delta, prev_pdf, mode):
+def _emission_weight(em, lit, surf, ref, light, part, prev_p, prev_n, d, t, n_geo, time, prev_delta, prev_pdf,
+                     mode):
     """The MIS weight of emission a BSDF-sampled ray found: 1 after the camera, a mirror or glass (delta), or
     for an emitter light sampling cannot find (a textured one: not in the emitter table); else the power
     heuristic against light sampling's pdf for the same direction (0 under light sampling alone)."""
@@ -333,7 +348,7 @@ def _emission_weight(em, lit, surf, ref, light, part, prev_p, d, t, n_geo, time,
     e = _emitter_entry(em, ref, light)
     if e < 0:
         return 1.0
-    pdf_light = emitter_pdf(em, lit, surf, e, prev_p, d, t, n_geo, ref, part, time)
+    pdf_light = emitter_pdf(em, lit, surf, e, prev_p, prev_n, d, t, n_geo, ref, part, time)
     if not pdf_light > 0.0:  # (pdf 0: it could not have found it from there)
         return 1.0
     return 0.0 if mode == MODE_LIGHT else power_heuristic(prev_pdf, pdf_light)
@@ -345,13 +360,16 @@ def _next_event(geo, surf, lit, em, p, n_geo, n_s, n_g, wo, kd, ks, mat, p_d, p_
     """Next-event estimation at p: an emitter sampled (u_pick, ul1, ul2), the smooth lobes evaluated towards
     it, a shadow ray, MIS against BSDF sampling. Returns (its unweighted contribution
     f·L·cos per channel, its MIS weight, whether the light is seen, rays traced)."""
-    wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, u_pick, ul1, ul2, time)
+    wi, dist, led, les, pdf_light, delta = sample_emitter(em, lit, surf, p, n_s, u_pick, ul1, ul2, time)
     if not (pdf_light > 0.0 and (delta or mode != MODE_BSDF)):
         return 0.0, 0.0, 0.0, 0.0, False, 0
     cos_i = n_s[0] * wi[0] + n_s[1] * wi[1] + n_s[2] * wi[2]
-    if not (cos_i > 0.0 and n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2] > 0.0):
-        return 0.0, 0.0, 0.0, 0.0, False, 0
-    fd, fs, pdf_bsdf = eval_smooth(kd, ks, mat, p_d, p_s, n_s, wo, wi)
+    cos_g = n_g[0] * wi[0] + n_g[1] * wi[1] + n_g[2] * wi[2]
+    if not (cos_i > 0.0 and cos_g > 0.0 or cos_i < 0.0 and cos_g < 0.0 and mat[MAT_MODEL] == MODEL_DIELECTRIC):
+        return 0.0, 0.0, 0.0, 0.0, False, 0  # (a rough dielectric lets light through from below)
+    entering = n_g[0] * n_geo[0] + n_g[1] * n_geo[1] + n_g[2] * n_geo[2] > 0.0
+    fd, fs, pdf_bsdf = eval_smooth(kd, ks, mat, p_d, p_s, relative_eta(mat, entering), n_s, wo, wi)
+    cos_i = abs(cos_i)
     c0 = (fd[0] * led[0] + fs[0] * les[0]) * cos_i
     c1 = (fd[1] * led[1] + fs[1] * les[1]) * cos_i
     c2 = (fd[2] * led[2] + fs[2] * les[2]) * cos_i
@@ -372,6 +390,8 @@ def _transmit(surf, ref, mat, obj, kt, p_t, u_t, wo, n_s, d, entering, media_obj
     roulette's throughput divides by (1 when nothing refracts), the media count)."""
     inv_p = 1.0 / p_t
     w0, w1, w2 = kt[0] * inv_p, kt[1] * inv_p, kt[2] * inv_p
+    if mat[MAT_MODEL] == MODEL_DIELECTRIC:
+        return _smooth_glass(surf, ref, mat, obj, w0, w1, w2, u_t, wo, n_s, entering, media_obj, media_ior, n_media)
     if not is_solid(surf, ref):
         return d, w0, w1, w2, 1.0, n_media  # a thin transparent sheet: straight through
     n1, n2 = _media_across(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
@@ -381,6 +401,21 @@ def _transmit(surf, ref, mat, obj, kt, p_t, u_t, wo, n_s, d, entering, media_obj
         return wi, w0, w1, w2, 1.0, n_media
     n_media = _media_update(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
     return wi, w0 * eta * eta, w1 * eta * eta, w2 * eta * eta, eta * eta, n_media  # radiance ∝ (n1/n2)²
+
+
+@njit
+def _smooth_glass(surf, ref, mat, obj, w0, w1, w2, u_t, wo, n_s, entering, media_obj, media_ior, n_media):
+    """`_transmit` for a smooth `dielectric` (MODEL_DIELECTRIC at α = 0): as Mitsuba's `dielectric`, its own
+    int_ior/ext_ior on the two sides (not the media the path is in) and refraction on any surface; the reflected
+    and the transmitted light take their own tints."""
+    eta = 1.0 / relative_eta(mat, entering)  # (n_i/n_t, as sample_dielectric takes it)
+    wi, through, F = sample_dielectric(wo, n_s, eta, u_t)
+    if not through:
+        return wi, w0 * mat[MAT_TINT], w1 * mat[MAT_TINT + 1], w2 * mat[MAT_TINT + 2], 1.0, n_media
+    if is_solid(surf, ref):  # (for a classic glass inside it)
+        n_media = _media_update(media_obj, media_ior, n_media, obj, mat[MAT_IOR], entering)
+    k = eta * eta  # radiance ∝ (n1/n2)²
+    return wi, w0 * mat[MAT_TINT_T] * k, w1 * mat[MAT_TINT_T + 1] * k, w2 * mat[MAT_TINT_T + 2] * k, k, n_media
 
 
 @njit_inline

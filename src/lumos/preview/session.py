@@ -58,7 +58,7 @@ COMMON_VIEWS = ("image", "albedo", "normal", "depth", "object_id", "samples")
 #: The render-block keys the preview sets itself or leaves out: path's time limit and denoising are for final
 #: renders (the preview refines until `spp`), and its AOVs are the one view shown.
 PREVIEW_DROPS = ("time_limit", "denoise", "aov")
-PATH_ONLY_KEYS = ("filter", "sampling", "sampler")
+PATH_ONLY_KEYS = ("filter", "sampling", "sampler", "light_selection")
 #: Samples per pixel at most, and the bounces, of whitted's account of a pixel of path or radiosity (`explain`).
 EXPLAIN_STAND_IN_SPP, EXPLAIN_STAND_IN_DEPTH = 4, 5
 #: Pixels that may wait to be explained (more are refused: a page clicks one at a time).
@@ -504,7 +504,8 @@ def _preview_dict(data: dict, method: Optional[str]) -> dict:
 def _without_path_settings(scene):
     """`scene` with the path tracer's own render settings at their defaults (whitted refuses them)."""
     render = scene.render.model_copy(update={"time_limit": None, "denoise": False, "filter": "box",
-                                             "sampling": "mis", "sampler": "sobol", "aov": []})
+                                             "sampling": "mis", "sampler": "sobol", "light_selection": "tree",
+                                             "aov": []})
     return scene.model_copy(update={"render": render})
 
 

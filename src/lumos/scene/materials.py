@@ -123,6 +123,57 @@ class Plastic(StrictModel):
         return {"ks": f0, "kr": zero, "shininess": phong_exponent(self.alpha)}
 
 
+class Dielectric(StrictModel):
+    """Glass, read physically: an interface between an inside of index `ior` and an outside of index `ext_ior`
+    (Mitsuba's int_ior and ext_ior: refraction reads only their ratio) whose surface is GGX microfacets of width
+    `alpha` (one number, or [αu, αv]; 0: smooth glass), as Mitsuba 3's `roughdielectric` (`dielectric` when
+    smooth): reflection with the dielectric Fresnel factor (times `tint`), refraction with the rest of it (times
+    `transmit_tint`), both sampled by the normals visible from the viewer (Walter et al. 2007; Heitz 2018)."""
+
+    ior: Positive = 1.5
+    ext_ior: Positive = 1.0
+    alpha: Union[tuple[NonNegative, NonNegative], NonNegative] = 0.0
+    tint: ShareColor = (1.0, 1.0, 1.0)
+    transmit_tint: ShareColor = (1.0, 1.0, 1.0)
+
+    @field_validator("alpha", mode="before")
+    @classmethod
+    def _alpha_tuple(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @model_validator(mode="after")
+    def _check(self):
+        for a in self.alphas:
+            if a > 1.0:
+                raise ValueError(f"alpha must be at most 1 (a GGX width), got {a:g}")
+        if self.ior == self.ext_ior:
+            raise ValueError("ior must differ from ext_ior (an interface between equal indices is no interface)")
+        return self
+
+    @property
+    def alphas(self) -> tuple[float, float]:
+        return self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
+
+    @property
+    def eta(self) -> float:
+        """The relative index inside over outside."""
+        return self.ior / self.ext_ior
+
+    def classic(self) -> dict:
+        """What the local methods read for this glass: `kt` = transmit_tint, `ior` = ior/ext_ior (they assume
+        the outside is the medium the ray comes from) with `fresnel: true` (Schlick's reflection and refraction),
+        and for a rough one (α at least 0.01) a Phong highlight `ks` of the head-on reflectance ((η−1)/(η+1))²
+        as wide as the GGX lobe; the reflected and refracted rays stay sharp."""
+        f0 = tuple(t * ((self.eta - 1.0) / (self.eta + 1.0)) ** 2 for t in self.tint)
+        zero = (0.0, 0.0, 0.0)
+        alpha = 0.5 * sum(self.alphas)
+        out = {"ka": zero, "kd": zero, "kr": zero, "kt": tuple(self.transmit_tint), "ior": self.eta,
+               "fresnel": True}
+        if alpha < 0.01:
+            return {**out, "ks": zero, "shininess": 1.0}
+        return {**out, "ks": f0, "shininess": phong_exponent(alpha)}
+
+
 def phong_exponent(alpha: float) -> float:
     """The Phong exponent whose lobe is about as wide as a GGX (or Beckmann) lobe of width α: Blinn-Phong
     n_B = 2/α² − 2 and a Phong lobe about the mirror direction of 4× narrower angle, n = n_B/4; in [1, 10⁴]."""
@@ -154,12 +205,21 @@ class Material(StrictModel):
     #: a plastic (kd under a clear coat) read physically by `path`; the local methods read kd and the coat's
     #: classic reading (`Plastic.classic`) unless given
     plastic: Optional[Plastic] = None
+    #: glass (smooth or rough) read physically by `path`; the local methods read the kt/ior glass it implies
+    #: (`Dielectric.classic`) unless given
+    dielectric: Optional[Dielectric] = None
 
     @model_validator(mode="after")
     def _one_model(self):
-        if self.conductor is not None and self.plastic is not None:
-            raise ValueError("give conductor or plastic, not both")
+        given = [name for name in ("conductor", "plastic", "dielectric") if getattr(self, name) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give one of conductor, plastic and dielectric, not {' and '.join(given)}")
         return self
+
+    @property
+    def physical(self):
+        """The physical model the path tracer reads (a Conductor, Plastic or Dielectric), or None."""
+        return self.conductor or self.plastic or self.dielectric
 
     @field_validator("texture", mode="after")
     @classmethod

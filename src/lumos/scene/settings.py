@@ -91,6 +91,9 @@ class RenderSettings(StrictModel):
     sampler: Literal["sobol", "independent"] = "sobol"
     #: how direct light is found: multiple importance sampling, or light (emitter) sampling or BSDF sampling alone
     sampling: Literal["mis", "light", "bsdf"] = "mis"
+    #: how light sampling picks an emitter: by its estimated contribution at the shading point (a light tree,
+    #: pbrt-v4's), or by its power alone (one table for the whole scene)
+    light_selection: Literal["tree", "power"] = "tree"
     #: stop after the pass that crosses this many seconds of rendering (the image holds the samples taken so far)
     time_limit: Optional[Positive] = None
     #: run Intel Open Image Denoise on the final image (needs the optional `pyoidn`)
