@@ -283,16 +283,16 @@ def _ambient_and_background(scene, env_pixels: Optional[np.ndarray],
     mean radiance for the background, and for Ia, where the scene gives no `ambient`, its irradiance over π by the
     surface's normal: a white diffuse surface (ka 1) under a uniform sky L shows L, under a sky with a sun it is
     brighter on the side that faces the sun, the classic Ka·Ia made physical."""
-    ambient = np.zeros((L.AMBIENT_ROWS, 3))
-    ambient[0] = scene.ambient
+    constant = np.array([scene.ambient], dtype=np.float64)
     background = np.array(scene.background, dtype=np.float64)
     if env_pixels is None:
-        return ambient, background
+        return constant, background
     from .environment import irradiance_sh, mean_radiance
 
-    if "ambient" not in getattr(scene, "model_fields_set", ()):
-        ambient[0] = 0.0
-        ambient[1:] = irradiance_sh(env_pixels, rotation)
+    if "ambient" in getattr(scene, "model_fields_set", ()):
+        return constant, mean_radiance(env_pixels)
+    ambient = np.zeros((L.AMBIENT_ROWS, 3))
+    ambient[1:] = irradiance_sh(env_pixels, rotation)
     return ambient, mean_radiance(env_pixels)
 
 

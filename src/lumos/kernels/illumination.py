@@ -245,13 +245,13 @@ def sh9(x, y, z):
 @njit
 def ambient_light(amb, n):
     """Ia at a surface of unit normal n (`layout.AMBIENT_ROWS`): the constant row 0 plus the environment's
-    irradiance over π in the spherical harmonics of rows 1-9, never negative (nine terms of a sun ring a little
-    on its far side)."""
+    irradiance over π in the spherical harmonics of rows 1-9 where there are ten rows, never negative (nine terms
+    of a sun ring a little on its far side)."""
     x, y, z = n[0], n[1], n[2]
     basis = (_SH0, _SH1 * y, _SH1 * z, _SH1 * x, _SH2 * x * y, _SH2 * y * z, _SH20 * (3.0 * z * z - 1.0), _SH2 * x * z,
              _SH22 * (x * x - y * y))
     r, g, b = amb[0, 0], amb[0, 1], amb[0, 2]
-    for k in range(9):
+    for k in range(amb.shape[0] - 1):  # (one row, the constant, without an environment to read)
         r += amb[k + 1, 0] * basis[k]
         g += amb[k + 1, 1] * basis[k]
         b += amb[k + 1, 2] * basis[k]

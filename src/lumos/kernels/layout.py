@@ -197,7 +197,8 @@ SceneArrays = namedtuple(
         "light_vecs",  # float64 (nl, 6, 3)
         "light_scalars",  # float64 (nl, LS_SIZE)
         "ambient",  # float64 (AMBIENT_ROWS, 3): Ia(n) = row 0 + Σ_k row k · Y_k(n), the rows 1-9 the irradiance over
-        # π of the environment in real spherical harmonics up to l = 2 (`illumination.ambient_light`); 0 without one
+        # π of the environment in real spherical harmonics up to l = 2 (`illumination.ambient_light`); (1, 3), the
+        # constant alone, where no environment is read
         "background",  # float64 (3,)
         "env_pixels",  # float32 (H, W, 3): the environment's lat-long radiance (1×1 black without one)
         "env_info",  # float64 (ENV_INFO_SIZE,): present, rotation, size (compile.environment)
