@@ -242,7 +242,7 @@ def sh9(x, y, z):
                      _SH20 * (3.0 * z * z - 1.0), _SH2 * x * z, _SH22 * (x * x - y * y)])
 
 
-@njit
+@njit_inline
 def ambient_light(amb, n):
     """Ia at a surface of unit normal n (`layout.AMBIENT_ROWS`): the constant row 0 plus the environment's
     irradiance over π in the spherical harmonics of rows 1-9 where there are ten rows, never negative (nine terms
