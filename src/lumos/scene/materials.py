@@ -36,7 +36,28 @@ METALS = {
 }
 
 
-class Conductor(StrictModel):
+class _GGXWidths(StrictModel):
+    """`alpha`: a GGX width in [0, 1], one number or [αu, αv] for anisotropic roughness (`alphas` gives the pair).
+    A subclass's own `model_validator` calls `_check_alpha`."""
+
+    alpha: Union[tuple[NonNegative, NonNegative], NonNegative] = 0.0
+
+    @field_validator("alpha", mode="before")
+    @classmethod
+    def _alpha_tuple(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    def _check_alpha(self) -> None:
+        for a in self.alphas:
+            if a > 1.0:
+                raise ValueError(f"alpha must be at most 1 (a GGX width), got {a:g}")
+
+    @property
+    def alphas(self) -> tuple[float, float]:
+        return self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
+
+
+class Conductor(_GGXWidths):
     """A metal, read physically: a GGX (Trowbridge–Reitz) microfacet surface of width `alpha` (one number, or
     [αu, αv] for anisotropic roughness; 0: a perfect mirror) whose reflectance is the exact Fresnel factor of
     the complex index of refraction η + ik per channel: a named `metal`, or `eta` and `k` (neither: a perfect
@@ -45,13 +66,7 @@ class Conductor(StrictModel):
     metal: Optional[Literal[tuple(METALS)]] = None
     eta: Optional[Color] = None
     k: Optional[Color] = None
-    alpha: Union[tuple[NonNegative, NonNegative], NonNegative] = 0.0
     tint: ShareColor = (1.0, 1.0, 1.0)
-
-    @field_validator("alpha", mode="before")
-    @classmethod
-    def _alpha_tuple(cls, v):
-        return tuple(v) if isinstance(v, list) else v
 
     @model_validator(mode="after")
     def _check(self):
@@ -59,14 +74,8 @@ class Conductor(StrictModel):
             raise ValueError("give metal or eta and k, not both")
         if (self.eta is None) != (self.k is None):
             raise ValueError("eta and k go together (the complex index of refraction η + ik)")
-        for a in (self.alphas):
-            if a > 1.0:
-                raise ValueError(f"alpha must be at most 1 (a GGX width), got {a:g}")
+        self._check_alpha()
         return self
-
-    @property
-    def alphas(self) -> tuple[float, float]:
-        return self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
 
     @property
     def index(self) -> Optional[tuple[tuple, tuple]]:
@@ -123,7 +132,7 @@ class Plastic(StrictModel):
         return {"ks": f0, "kr": zero, "shininess": phong_exponent(self.alpha)}
 
 
-class Dielectric(StrictModel):
+class Dielectric(_GGXWidths):
     """Glass, read physically: an interface between an inside of index `ior` and an outside of index `ext_ior`
     (Mitsuba's int_ior and ext_ior: refraction reads only their ratio) whose surface is GGX microfacets of width
     `alpha` (one number, or [αu, αv]; 0: smooth glass), as Mitsuba 3's `roughdielectric` (`dielectric` when
@@ -132,27 +141,15 @@ class Dielectric(StrictModel):
 
     ior: Positive = 1.5
     ext_ior: Positive = 1.0
-    alpha: Union[tuple[NonNegative, NonNegative], NonNegative] = 0.0
     tint: ShareColor = (1.0, 1.0, 1.0)
     transmit_tint: ShareColor = (1.0, 1.0, 1.0)
 
-    @field_validator("alpha", mode="before")
-    @classmethod
-    def _alpha_tuple(cls, v):
-        return tuple(v) if isinstance(v, list) else v
-
     @model_validator(mode="after")
     def _check(self):
-        for a in self.alphas:
-            if a > 1.0:
-                raise ValueError(f"alpha must be at most 1 (a GGX width), got {a:g}")
+        self._check_alpha()
         if self.ior == self.ext_ior:
             raise ValueError("ior must differ from ext_ior (an interface between equal indices is no interface)")
         return self
-
-    @property
-    def alphas(self) -> tuple[float, float]:
-        return self.alpha if isinstance(self.alpha, tuple) else (self.alpha, self.alpha)
 
     @property
     def eta(self) -> float:
