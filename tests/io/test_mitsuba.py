@@ -269,7 +269,7 @@ def test_a_diffuse_floor_under_a_point_light_renders_mitsubas_radiance(tmp_path)
       <emitter type="point"><point name="position" value="0, 2, 0"/><rgb name="intensity" value="5"/></emitter>
       <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0.6"/></bsdf></shape>""")
-    img = lumos.render(path, method="raycast", spp=1, filter="box")  # Mitsuba's Gaussian is a path setting
+    img = lumos.render(path, method="raycast", spp=1, filter="box")  # (one ray per pixel: no filter to read)
     np.testing.assert_allclose(img.array[1:3, 1:3], 0.6 / math.pi * 5 / 4, rtol=5e-3)
 
 
