@@ -62,23 +62,22 @@ def irradiance_sh(pixels: np.ndarray, rotation: float = 0.0) -> np.ndarray:
     Irradiance Environment Maps"): the radiance's projection on bands 0-2, each band l scaled by Â_l/π = 1, 2/3,
     1/4 (the clamped cosine's own coefficients), so that a uniform radiance L gives E/π = L everywhere."""
     from ..kernels.illumination import sh9
+    from ..mesh.directions import lat_long_directions
 
     # pixels are constant over their area: a small image is integrated over a finer grid of its own pixels (the
     # midpoint rule per row is then exact to about 1e-5 for the harmonics' polar parts)
     pixels = np.repeat(np.repeat(pixels, -(-256 // pixels.shape[0]), axis=0), -(-512 // pixels.shape[1]), axis=1)
     h, w = pixels.shape[:2]
-    phi = ((np.arange(w) + 0.5) / w - 0.5) * 2.0 * np.pi
+    d = lat_long_directions(h, w)  # in the image's own frame
     a = np.radians(rotation)
+    x, z = np.cos(a) * d[..., 0] + np.sin(a) * d[..., 2], -np.sin(a) * d[..., 0] + np.cos(a) * d[..., 2]  # the world's
     edges = np.cos(np.arange(h + 1) / h * np.pi)
+    omega = ((edges[:-1] - edges[1:]) * 2.0 * np.pi / w)[:, None]  # each pixel's solid angle
     coefficients = np.zeros((9, 3))
     for i0 in range(0, h, 64):  # a block of rows at a time: (9, rows, w) stays small for a large image
-        rows = np.arange(i0, min(i0 + 64, h))
-        theta = (rows + 0.5) / h * np.pi
-        st, y = np.sin(theta)[:, None], np.broadcast_to(np.cos(theta)[:, None], (rows.size, w))
-        xi, zi = st * np.sin(phi)[None, :], -st * np.cos(phi)[None, :]  # the image's own frame
-        x, z = np.cos(a) * xi + np.sin(a) * zi, -np.sin(a) * xi + np.cos(a) * zi  # turned into the world
-        omega = ((edges[rows] - edges[rows + 1]) * 2.0 * np.pi / w)[:, None]  # each pixel's solid angle
-        coefficients += np.einsum("khw,hwc->kc", sh9(x, y, z) * omega, pixels[rows].astype(np.float64))
+        rows = slice(i0, min(i0 + 64, h))
+        basis = sh9(x[rows], d[rows, :, 1], z[rows]) * omega[rows]
+        coefficients += np.einsum("khw,hwc->kc", basis, pixels[rows].astype(np.float64))
     return coefficients * np.array([1.0] + [2.0 / 3.0] * 3 + [0.25] * 5)[:, None]
 
 

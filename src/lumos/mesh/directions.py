@@ -2,6 +2,7 @@
 octahedral one.
 
     d = lat_long_directions(h, w)          # (h, w, 3): the direction at each lat-long pixel's centre
+    row, col = lat_long_pixel(d, h, w)     # the pixel each direction falls in (kernels.environment's twin)
     d = equal_area_square_to_sphere(u, v)  # (..., 3) of a point of [0, 1]² (Clarberg's map, as pbrt-v4 has it)
     u, v = equal_area_sphere_to_square(d)  # its inverse
 
@@ -25,6 +26,16 @@ def lat_long_directions(height: int, width: int) -> np.ndarray:
     phi = ((np.arange(width) + 0.5) / width - 0.5) * 2.0 * np.pi
     st, ct = np.sin(theta)[:, None], np.cos(theta)[:, None]
     return np.stack(np.broadcast_arrays(st * np.sin(phi)[None, :], ct, -st * np.cos(phi)[None, :]), axis=-1)
+
+
+def lat_long_pixel(d, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """(row, column) int64 of the lat-long pixel each unit direction d (..., 3) falls in, as the kernels find it
+    (`kernels.environment`, which also turns d back by the environment's rotation first)."""
+    d = np.asarray(d, float)
+    col = np.clip(((0.5 + np.arctan2(d[..., 0], -d[..., 2]) / (2.0 * np.pi)) * width).astype(np.int64), 0,
+                  width - 1)
+    row = np.minimum((np.arccos(np.clip(d[..., 1], -1.0, 1.0)) / np.pi * height).astype(np.int64), height - 1)
+    return row, col
 
 
 def equal_area_square_to_sphere(u, v) -> np.ndarray:

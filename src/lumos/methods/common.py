@@ -163,23 +163,17 @@ def background_image(environment, background, camera, width: int, height: int) -
         out[:] = np.asarray(background, np.float64)
         return out
     from ..compile.camera import camera_arrays
-    from ..kernels.layout import CAM_ORTHO, CAM_TAN_HALF_FOV, ENV_COS, ENV_SIN
+    from ..kernels.layout import ENV_COS, ENV_SIN
+    from ..kernels.queries import camera_rays_kernel
+    from ..mesh.directions import lat_long_pixel
 
     pixels, _, _, info = environment
     vecs, params = camera_arrays(camera)
-    u, v, w = vecs[1], vecs[2], vecs[3]
-    sx = 2.0 * (np.arange(width) + 0.5) / width - 1.0
-    sy = 1.0 - 2.0 * (np.arange(height) + 0.5) / height
-    if params[CAM_ORTHO] != 0.0:  # every ray goes along −w
-        d = np.broadcast_to(-w, (height, width, 3))
-    else:
-        t = params[CAM_TAN_HALF_FOV]
-        d = (sx[None, :, None] * (width / height) * t * u + sy[:, None, None] * t * v) - w
-        d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+    fx, fy = np.meshgrid(np.arange(width) + 0.5, np.arange(height) + 0.5)
+    origins, d = np.empty((width * height, 3)), np.empty((width * height, 3))
+    camera_rays_kernel(vecs, params, np.int64(width), np.int64(height), fx.ravel(), fy.ravel(), origins, d)
     c, s = info[ENV_COS], info[ENV_SIN]
-    x, z = c * d[..., 0] - s * d[..., 2], s * d[..., 0] + c * d[..., 2]  # turned back by the rotation
-    h, wd = pixels.shape[:2]
-    col = np.clip(((0.5 + np.arctan2(x, -z) / (2.0 * np.pi)) * wd).astype(np.int64), 0, wd - 1)
-    row = np.minimum((np.arccos(np.clip(d[..., 1], -1.0, 1.0)) / np.pi * h).astype(np.int64), h - 1)
+    turned = np.column_stack([c * d[:, 0] - s * d[:, 2], d[:, 1], s * d[:, 0] + c * d[:, 2]])  # by the rotation
+    row, col = lat_long_pixel(turned.reshape(height, width, 3), *pixels.shape[:2])
     out[:] = pixels[row, col]
     return out
