@@ -22,6 +22,8 @@ import numpy as np
 from ..errors import LumosError
 from ..kernels.layout import ENV_COS, ENV_ENTRY, ENV_HEIGHT, ENV_INFO_SIZE, ENV_PRESENT, ENV_SIN, ENV_WIDTH
 
+#: negative values down to this fraction of the image's mean are compression noise, read as 0 (with a warning)
+NEGATIVE_TOLERANCE = 0.01
 
 
 def environment_image(env) -> np.ndarray:
@@ -40,8 +42,20 @@ def environment_image(env) -> np.ndarray:
         image = read_image(env._path if env._path is not None else env.file)
     except LumosError as exc:
         raise LumosError(f"environment.file: {exc}") from None
-    if not np.isfinite(image).all() or (image < 0).any():
-        raise LumosError(f"environment.file: {env.file!r} has negative, NaN or infinite pixels")
+    if not np.isfinite(image).all():
+        raise LumosError(f"environment.file: {env.file!r} has NaN or infinite pixels")
+    low = float(image.min()) if image.size else 0.0
+    if low < 0.0:
+        # lossy EXR compression (DWA, as Blender's own HDRIs) leaves a few values a hair below 0: read as 0
+        if -low > NEGATIVE_TOLERANCE * max(float(image.mean()), 0.0):
+            raise LumosError(f"environment.file: {env.file!r} has negative pixels (down to {low:.3g})")
+        import warnings
+
+        from ..errors import LumosWarning
+
+        warnings.warn(f"environment.file: {env.file!r}: {int((image < 0).sum())} values slightly below 0 (down to "
+                      f"{low:.2g}, lossy compression) read as 0", LumosWarning, stacklevel=2)
+        image = np.maximum(image, 0.0)
     return np.ascontiguousarray(image * scale, np.float32)
 
 
