@@ -282,6 +282,29 @@ def test_image_appears_upright_on_a_sphere(tmp_path):
         np.testing.assert_allclose(kd, colour, atol=1e-6)
 
 
+def test_a_second_compile_reuses_the_decoded_image_until_the_file_changes(tmp_path, rng, monkeypatch):
+    """Decoded texels are kept for the process (a sheet or an animation compiles the same scene again), keyed by
+    the file's modification time and size: the same bytes are decoded once, a rewritten file again; the colours
+    come from an exact table of the 256 sRGB codes."""
+    import os
+
+    from lumos.compile import textures as compile_textures
+
+    codes = rng.integers(0, 256, (4, 6, 3))
+    path = write_png(tmp_path / "cached.png", codes)
+    decodes = []
+    original = compile_textures._decode
+    monkeypatch.setattr(compile_textures, "_decode", lambda *a: decodes.append(a) or original(*a))
+    scene = textured_scene({"a": {"kd": 0.5, "texture": {"type": "image", "file": path}}})
+    first = compile_dict(scene).arrays.tex_pixels
+    np.testing.assert_array_equal(compile_dict(scene).arrays.tex_pixels, first)
+    assert len(decodes) == 1
+    np.testing.assert_array_equal(compile_textures.load_texels(path), srgb_decode(codes / 255.0).astype(np.float32))
+    write_png(tmp_path / "cached.png", 255 - codes)
+    os.utime(path, ns=(1, 1))  # (a new mtime even on a coarse clock)
+    assert not np.array_equal(compile_dict(scene).arrays.tex_pixels, first) and len(decodes) == 2
+
+
 def test_shared_image_file_is_loaded_once(tmp_path, rng, monkeypatch):
     from lumos.compile import textures as compile_textures
 

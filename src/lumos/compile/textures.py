@@ -16,6 +16,7 @@ colours as well becomes two rows (the colour one first), so that a row reads eit
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from pathlib import Path
 
 import numpy as np
@@ -191,17 +192,51 @@ def _shrink(a: np.ndarray, m: int, axis: int) -> np.ndarray:
     return np.moveaxis(out, 0, axis)
 
 
+#: decoded images kept for the next compile in this process (a sheet, an animation, the preview compile the same
+#: scene again), by file, modification time, size and kind, up to this many bytes (oldest dropped first)
+TEXEL_CACHE_BYTES = 512 << 20
+_texel_cache: OrderedDict = OrderedDict()
+
+
 def load_texels(path, bump: bool = False, kind: str = "color") -> np.ndarray:
     """float32 (H, W, 3) texels of an image file, top row first, by `kind`: `color`, linear RGB decoded from
     sRGB; `height` (or `bump=True`), the luminance of the raw values in [0, 1], repeated in all three channels;
     `normal`, the raw RGB in [0, 1]; `alpha`, the raw alpha channel, or the raw luminance of an image without
-    one, repeated in all three channels. Only `alpha` reads the alpha channel."""
+    one, repeated in all three channels. Only `alpha` reads the alpha channel. Read-only: the array may be
+    the one an earlier call decoded (`TEXEL_CACHE_BYTES`)."""
+    kind = "height" if bump else kind
+    try:
+        stat = Path(path).stat()
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise LumosError(f"cannot read image {str(path)!r}: {reason}") from None
+    key = (str(Path(path).resolve()), stat.st_mtime_ns, stat.st_size, kind)
+    if key in _texel_cache:
+        _texel_cache.move_to_end(key)
+        return _texel_cache[key]
+    texels = _decode(path, kind)
+    texels.flags.writeable = False
+    _texel_cache[key] = texels
+    while sum(a.nbytes for a in _texel_cache.values()) > TEXEL_CACHE_BYTES and len(_texel_cache) > 1:
+        _texel_cache.popitem(last=False)
+    return texels
+
+
+def _srgb_table() -> np.ndarray:
+    """float32 (256,): the linear value of each 8-bit sRGB code (exactly what `srgb_decode` gives, as a table)."""
+    from ..tonemap import srgb_decode
+
+    return srgb_decode(np.arange(256) / 255.0).astype(np.float32)
+
+
+def _decode(path, kind: str) -> np.ndarray:
+    """`load_texels` without the cache."""
     from PIL import Image as PILImage
 
     from ..tonemap import srgb_decode
 
-    kind = "height" if bump else kind
     alpha = None
+    codes = None  # 8-bit RGB, decoded through a table when the texels are colours
     try:
         with PILImage.open(path) as img:
             img.load()
@@ -210,6 +245,8 @@ def load_texels(path, bump: bool = False, kind: str = "color") -> np.ndarray:
                 raw = np.repeat(np.clip(raw, 0.0, 1.0)[..., None], 3, axis=2)
             elif img.mode == "F":
                 raw = np.repeat(np.asarray(img, dtype=np.float64)[..., None], 3, axis=2)
+            elif kind == "color":
+                codes = np.asarray(img.convert("RGB"))
             else:
                 raw = np.asarray(img.convert("RGB"), dtype=np.float64) / 255.0
                 if kind == "alpha" and ("A" in img.getbands() or "transparency" in img.info):
@@ -217,6 +254,8 @@ def load_texels(path, bump: bool = False, kind: str = "color") -> np.ndarray:
     except (OSError, ValueError, SyntaxError) as exc:  # PIL raises all three on bad files
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise LumosError(f"cannot read image {str(path)!r}: {reason}") from None
+    if codes is not None:
+        return _srgb_table()[codes]
     if kind in ("height", "alpha"):
         value = raw @ _LUMA if alpha is None else alpha
         return np.repeat(value[..., None], 3, axis=2).astype(np.float32)
