@@ -74,7 +74,8 @@ def test_a_plastic_keeps_its_base_carries_its_coat_tables_and_reads_classically_
 
 
 def test_a_material_is_a_metal_or_a_plastic_not_both():
-    with pytest.raises(lumos.LumosError, match="give one of conductor, plastic and dielectric, not conductor and "
+    with pytest.raises(lumos.LumosError, match="give one of conductor, plastic, dielectric, principled, not "
+                                               "conductor and "
                                                "plastic"):
         rows_of({"conductor": {}, "plastic": {}})
 

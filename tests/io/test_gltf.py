@@ -18,6 +18,7 @@ from lumos.io.gltf import import_gltf, triangles
 from lumos.io.gltf_document import quaternion_matrix
 from lumos.io.gltf_materials import shininess
 from lumos.io.models import import_model
+from lumos.scene.materials import Material
 
 GLTF = DATA / "gltf"
 SPOT_MERGED = hasattr(lumos.scene.model, "SpotLight")
@@ -129,8 +130,10 @@ def test_box_counts_bounds_and_the_root_matrix():
     world_from_local = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]])
     np.testing.assert_allclose(obj["vertices"], local @ world_from_local.T, atol=1e-7)
     np.testing.assert_allclose(obj["normals"], box_buffer(doc, 1) @ world_from_local.T, atol=1e-7)
-    # baseColorFactor red, metallic and roughness at their defaults (1): a rough red metal
-    mat = model.materials[obj["material"]]
+    # baseColorFactor red, metallic and roughness at their defaults (1): a rough red metal, whose classic reading
+    # is a red Phong lobe
+    assert model.materials[obj["material"]]["principled"]["metallic"] == 1.0
+    mat = classic(model.materials[obj["material"]])
     np.testing.assert_allclose(mat["ks"], [0.8, 0, 0], atol=1e-6)
     np.testing.assert_allclose(mat["kd"], 0.0)
     np.testing.assert_allclose(mat["ka"], [0.8, 0, 0], atol=1e-6)
@@ -146,7 +149,8 @@ def test_box_textured_uvs_flip_v_and_the_png_is_written_once():
     uv = np.frombuffer(buf, "<f4", count=48, offset=doc["bufferViews"][2]["byteOffset"]).reshape(-1, 2)
     np.testing.assert_allclose(obj["uvs"], np.column_stack([uv[:, 0], 1 - uv[:, 1]]))
     tex = model.materials[obj["material"]]["texture"]
-    assert tex["type"] == "image" and tex["wrap"] == "repeat" and sorted(tex["apply_to"]) == ["ka", "ks"]
+    assert tex["type"] == "image" and tex["wrap"] == "repeat" and tex["mode"] == "multiply"
+    assert sorted(tex["apply_to"]) == ["base_color", "ka", "ks"]  # a rough metal: its base and the classic lobe
     png = base64.b64decode(doc["images"][0]["uri"].split(",", 1)[1])
     assert Path(tex["file"]).is_absolute() and Path(tex["file"]).read_bytes() == png
     assert import_gltf(GLTF / "BoxTextured.gltf").materials["material0"]["texture"]["file"] == tex["file"]
@@ -308,6 +312,11 @@ def test_spot_light_validates(tmp_path):
 # -------------------------------------------------------------------------------------------- materials
 
 
+def classic(material: dict) -> dict:
+    """The classic coefficients an imported material dict gives the local methods (`Material.classic`)."""
+    return Material.model_validate(material).classic()
+
+
 def material_of(tmp_path, material: dict, used=()) -> tuple[dict, list]:
     g = one_triangle()
     g.json["meshes"][0]["primitives"][0]["material"] = 0
@@ -323,6 +332,12 @@ def test_metallic_roughness_table(tmp_path, metallic, rough):
     base = np.array([0.8, 0.4, 0.2])
     mat, model = material_of(tmp_path, {"name": "m", "pbrMetallicRoughness": {
         "baseColorFactor": [*base, 1], "metallicFactor": metallic, "roughnessFactor": rough}})
+    model_ = mat["principled"]
+    np.testing.assert_allclose(model_.pop("base_color"), base)
+    assert model_ == {"metallic": metallic, "roughness": rough, "ior": 1.5, "specular": 1.0,
+                      "specular_color": [1.0] * 3, "transmission": 0.0}
+    model_["base_color"] = list(base)
+    mat = classic(mat)
     f0 = 0.04 * (1 - metallic) + base * metallic
     g = (1 - rough) ** 2
     np.testing.assert_allclose(mat["kd"], base * (1 - metallic) * 0.96)
@@ -348,12 +363,14 @@ def test_transmission_ior_and_emissive_strength(tmp_path):
         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.9}, "KHR_materials_ior": {"ior": 2.0},
                        "KHR_materials_emissive_strength": {"emissiveStrength": 4}}},
         used=["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_emissive_strength"])
+    assert mat["principled"]["transmission"] == 0.9 and mat["principled"]["ior"] == 2.0
+    np.testing.assert_allclose(mat["emission"], [4, 2, 0])
+    mat = classic(mat)
     f0 = (1 / 3) ** 2
     np.testing.assert_allclose(mat["kt"], [(1 - f0) * 0.9] * 3)
     np.testing.assert_allclose(mat["kd"], [(1 - f0) * 0.1] * 3)
     np.testing.assert_allclose(mat["kr"], [f0] * 3)  # roughness 0: all of the specular is a mirror
     assert mat["ior"] == 2.0 and mat["fresnel"] is True
-    np.testing.assert_allclose(mat["emission"], [4, 2, 0])
     assert model.warnings == []
     lumos.load_scene(scene_of(model))
 
@@ -419,8 +436,9 @@ def test_textures_emission_normal_mask_and_transform(tmp_path):
 def test_texture_warnings_and_missing_image(tmp_path):
     mat, model = textured_material(tmp_path, {"pbrMetallicRoughness": {
         "baseColorTexture": {"index": 0, "texCoord": 1}, "metallicRoughnessTexture": {"index": 0}}})
-    assert mat["texture"]["wrap"] == "clamp"
-    assert any("TEXCOORD_0" in w for w in model.warnings) and any("metallicRoughnessTexture" in w for w in model.warnings)
+    base, metal_rough = mat["texture"]
+    assert base["wrap"] == "clamp" and metal_rough["apply_to"] == ["metallic_roughness"]
+    assert any("TEXCOORD_0" in w for w in model.warnings)
     (tmp_path / "tex.png").unlink()
     model = import_gltf(tmp_path / "tex.gltf")
     assert "texture" not in model.materials["material0"] and any("no such image" in w for w in model.warnings)

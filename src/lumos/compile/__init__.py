@@ -82,13 +82,12 @@ class _Materials:
         row[L.MAT_SHININESS] = 1.0
         row[L.MAT_IOR] = 1.0
         if material is not None:
-            classic = {k: getattr(material, k) for k in ("ka", "kd", "ks", "shininess", "kr", "kt", "ior", "fresnel")}
+            classic = material.classic()  # (a physical model's classic reading, where not given)
             model = material.physical
-            if model is not None:  # the classic reading of a physical model, where not given
-                derived = model.classic()
-                classic.update({k: v for k, v in derived.items() if k not in material.model_fields_set})
+            if model is not None:
                 columns = (_conductor_columns if material.conductor is not None else
-                           _plastic_columns if material.plastic is not None else _dielectric_columns)
+                           _plastic_columns if material.plastic is not None else
+                           _dielectric_columns if material.dielectric is not None else _principled_columns)
                 columns(row, model)
             row[L.MAT_KA : L.MAT_KA + 3] = classic["ka"]
             row[L.MAT_KD : L.MAT_KD + 3] = classic["kd"]
@@ -139,6 +138,18 @@ def _dielectric_columns(row: np.ndarray, glass) -> None:
     row[L.MAT_ETA] = glass.eta
     row[L.MAT_TINT : L.MAT_TINT + 3] = glass.tint
     row[L.MAT_TINT_T : L.MAT_TINT_T + 3] = glass.transmit_tint
+
+
+def _principled_columns(row: np.ndarray, principled) -> None:
+    """The physical model's columns of glTF's metallic–roughness material: its factors (`kernels.principled`)."""
+    row[L.MAT_MODEL] = L.MODEL_PRINCIPLED
+    row[L.MAT_BASE : L.MAT_BASE + 3] = principled.base_color
+    row[L.MAT_METALLIC] = principled.metallic
+    row[L.MAT_ROUGHNESS] = principled.roughness
+    row[L.MAT_ALPHA : L.MAT_ALPHA + 2] = principled.roughness**2
+    row[L.MAT_TRANSMISSION] = principled.transmission
+    row[L.MAT_F0 : L.MAT_F0 + 3] = principled.f0
+    row[L.MAT_F90] = principled.specular
 
 
 class _Shapes:

@@ -58,6 +58,8 @@ def physical_materials(names: list[str], rows: np.ndarray) -> np.ndarray:
         rows[np.flatnonzero(physical)[metal], L.MAT_KD : L.MAT_KD + 3] = 0.0
         rows[physical, L.MAT_KS : L.MAT_KS + 3] = np.where(smooth, 0.0, tint)
         rows[physical, L.MAT_KR : L.MAT_KR + 3] = np.where(smooth, tint, 0.0)
+    gltf = rows[:, L.MAT_MODEL] == L.MODEL_PRINCIPLED  # its lobes' weights come per hit (kernels.principled):
+    rows[gltf, L.MAT_KR : L.MAT_KR + 3] = 0.0  # no mirror lobe (and no Phong ks, no classic kt, read)
     glass = rows[:, L.MAT_MODEL] == L.MODEL_DIELECTRIC  # one lobe of weight 1; its tints are in its own columns
     if glass.any():  # (kernels.bsdf: a rough one is the glossy lobe, ks; a smooth one the transmission lobe, kt)
         smooth = (rows[glass, L.MAT_ALPHA] + rows[glass, L.MAT_ALPHA + 1] == 0.0)[:, None]

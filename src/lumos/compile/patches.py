@@ -299,7 +299,7 @@ def surfaces(scene, segments: int, plane_lo, plane_hi):
     n_groups = len(scene.objects) + len(scene.lights)  # smoothing groups: objects, area lights, then csg solids
     for object_id, obj in enumerate(scene.objects):
         material = scene.material_of(obj)
-        clear = any(c > 0 for c in material.kt)  # a transparent solid: rays inside it meet its inside
+        clear = any(c > 0 for c in material.classic()["kt"])  # a transparent solid: rays inside it meet its inside
         world = None if obj.transform is None else obj.transform.to_matrix()
         if obj.type == "csg":  # the scan-line renderer's boolean mesh: closed, one piece per solid that shows
             pieces = csg_pieces(scene, obj, world, segments, f"objects[{object_id}]")
@@ -310,7 +310,7 @@ def surfaces(scene, segments: int, plane_lo, plane_hi):
                                   np.concatenate([p.faces + k for p, k in zip(pieces, offsets)]),
                                   _viewpoints(scene, object_id))
             for piece in pieces:
-                outer, inner = _sides(inside, any(c > 0 for c in piece.material.kt), scene)
+                outer, inner = _sides(inside, any(c > 0 for c in piece.material.classic()["kt"]), scene)
                 yield Surface(object_id, outer, inner, n_groups, piece.material, solid=True,  # smoothed per solid
                               triangles=lambda piece=piece: (piece.vertices, piece.faces))
                 n_groups += 1
@@ -434,13 +434,14 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
                 if any("opacity" in t.apply_to for t in mat.textures):
                     warnings.warn(f"radiosity ignores opacity maps: the surfaces of material {name} stay whole "
                                   "(no cut-out holes)", LumosWarning, stacklevel=3)
-        total = kd + ks + kr + np.asarray(mat.kt)
+        total = kd + ks + kr + np.asarray(mat.classic()["kt"])
         if total.max() > 1.0:
             kd = kd / total.max()
         return mat_index[key], kd, emission
 
     def optics(material) -> np.ndarray:
-        return np.array([*material.kr, *material.kt, material.ior, 1.0 if material.fresnel else 0.0])
+        c = material.classic()
+        return np.array([*c["kr"], *c["kt"], c["ior"], 1.0 if c["fresnel"] else 0.0])
 
     n_objects = len(scene.objects)
     for surface in surfaces(scene, segments, plane_lo, plane_hi):

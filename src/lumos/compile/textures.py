@@ -28,7 +28,10 @@ from ..kernels import texture as T
 _KINDS = {"image": T.TEXTURE_IMAGE, "checker": T.TEXTURE_CHECKER, "stripes": T.TEXTURE_STRIPES,
           "noise": T.TEXTURE_NOISE, "normal": T.TEXTURE_IMAGE}
 _WRAPS = {"repeat": T.WRAP_REPEAT, "clamp": T.WRAP_CLAMP}
-_APPLY = {"ka": T.APPLY_KA, "kd": T.APPLY_KD, "ks": T.APPLY_KS, "kr": T.APPLY_KR, "emission": T.APPLY_EMISSION}
+_APPLY = {"ka": T.APPLY_KA, "kd": T.APPLY_KD, "ks": T.APPLY_KS, "kr": T.APPLY_KR, "emission": T.APPLY_EMISSION,
+          "base_color": T.APPLY_BASE}
+#: the data targets (alone in their texture): (apply bits, what the texels hold, the mode forced on them)
+_DATA = {"metallic_roughness": (T.APPLY_METAL_ROUGH, "raw", None), "occlusion": (T.APPLY_KA, "red", "multiply")}
 _MODES = {"replace": T.MODE_REPLACE, "multiply": T.MODE_MULTIPLY}
 #: Rec. 709 / sRGB luminance weights
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -70,6 +73,10 @@ class _Table:
         if key not in self.lists:
             first = len(self.infos)
             for tex in textures:
+                data = _DATA.get(tex.apply_to[0])
+                if data is not None:  # (scene.materials: a data texture applies to nothing else)
+                    self.infos.append(self._row(tex, data[0], data[1], data[2]))
+                    continue
                 colour = sum(_APPLY[name] for name in set(tex.apply_to) if name != "opacity")
                 if colour:
                     self.infos.append(self._row(tex, colour, "color"))
@@ -84,8 +91,9 @@ class _Table:
             self.infos.append(self._row(bump, 0, "normal" if bump.type == "normal" else "height"))
         return self.bumps[id(bump)]
 
-    def _row(self, tex, apply: int, kind: str) -> np.ndarray:
-        """One tex_info row; `kind` is what its texels hold: color, alpha, height or normal."""
+    def _row(self, tex, apply: int, kind: str, mode: str | None = None) -> np.ndarray:
+        """One tex_info row; `kind` is what its texels hold: color, alpha, height, normal, raw (RGB) or red (the
+        raw red in all three channels); `mode` overrides the texture's own."""
         info = np.zeros(T.TEX_SIZE)
         info[T.TEX_KIND] = _KINDS[tex.type]
         info[T.TEX_SCALE_U], info[T.TEX_SCALE_V] = tex.uv_scale
@@ -103,7 +111,7 @@ class _Table:
         else:
             info[T.TEX_COLOR0 : T.TEX_COLOR0 + 3] = tex.colors[0]
             info[T.TEX_COLOR1 : T.TEX_COLOR1 + 3] = tex.colors[1]
-            info[T.TEX_MODE] = _MODES[tex.mode]
+            info[T.TEX_MODE] = _MODES[mode or tex.mode]
         if tex.file is not None:
             info[T.TEX_OFFSET], info[T.TEX_WIDTH], info[T.TEX_HEIGHT], info[T.TEX_LEVELS] = self._image(tex, kind)
         return info
@@ -115,7 +123,7 @@ class _Table:
             texels = load_texels(path, kind=kind)
             h, w = texels.shape[:2]
             # bottom row first: v = 0 at the bottom
-            levels = mip_levels(texels[::-1]) if kind in ("color", "height", "normal") else [texels[::-1]]
+            levels = mip_levels(texels[::-1]) if kind != "alpha" else [texels[::-1]]
             self.images[key] = (self.n_pixels, w, h, len(levels))
             for level in levels:
                 self.pixels.append(level.reshape(-1, 3))
@@ -139,12 +147,15 @@ def texture_mean(tex) -> np.ndarray:
 
 
 def mean_coefficients(material) -> dict[str, np.ndarray]:
-    """The material's ka, kd, ks, kr and emission (float64 (3,) each) with each of its textures' mean colour
-    applied in list order, replacing or multiplying as its `mode` says (opacity is left out): what a method
+    """The material's classic ka, kd, ks, kr (`Material.classic`) and emission (float64 (3,) each) with each of
+    its textures' mean colour applied in list order, replacing or multiplying as its `mode` says (opacity and the
+    principled model's own targets are left out): what a method
     that cannot look textures up per point (radiosity) uses."""
-    out = {name: np.asarray(getattr(material, name), np.float64) for name in ("ka", "kd", "ks", "kr", "emission")}
+    classic = material.classic()
+    out = {name: np.asarray(classic[name], np.float64) for name in ("ka", "kd", "ks", "kr")}
+    out["emission"] = np.asarray(material.emission, np.float64)
     for tex in material.textures:
-        targets = [name for name in tex.apply_to if name != "opacity"]
+        targets = [name for name in tex.apply_to if name in out]
         if not targets:
             continue
         mean = texture_mean(tex)
@@ -202,7 +213,8 @@ def load_texels(path, bump: bool = False, kind: str = "color") -> np.ndarray:
     """float32 (H, W, 3) texels of an image file, top row first, by `kind`: `color`, linear RGB decoded from
     sRGB; `height` (or `bump=True`), the luminance of the raw values in [0, 1], repeated in all three channels;
     `normal`, the raw RGB in [0, 1]; `alpha`, the raw alpha channel, or the raw luminance of an image without
-    one, repeated in all three channels. Only `alpha` reads the alpha channel. Read-only: the array may be
+    one, repeated in all three channels; `raw`, the raw RGB (a glTF metallic–roughness map); `red`, the raw red
+    in all three (a glTF occlusion map). Only `alpha` reads the alpha channel. Read-only: the array may be
     the one an earlier call decoded (`TEXEL_CACHE_BYTES`)."""
     kind = "height" if bump else kind
     try:
@@ -259,6 +271,8 @@ def _decode(path, kind: str) -> np.ndarray:
     if kind in ("height", "alpha"):
         value = raw @ _LUMA if alpha is None else alpha
         return np.repeat(value[..., None], 3, axis=2).astype(np.float32)
-    if kind == "normal":
+    if kind in ("normal", "raw"):
         return raw.astype(np.float32)
+    if kind == "red":
+        return np.repeat(raw[..., :1], 3, axis=2).astype(np.float32)
     return srgb_decode(raw).astype(np.float32)

@@ -1,22 +1,22 @@
-"""glTF materials (pbrMetallicRoughness and the KHR material extensions) → lumos's classic material dicts.
+"""glTF materials (pbrMetallicRoughness and the KHR material extensions) → lumos material dicts.
 
     materials = Materials(doc)        # doc: a gltf_document.Document
     name = materials.key(0)           # the lumos material name of glTF material 0 (converted once)
     materials.used                    # {name: material dict} of the materials the meshes use
 
-The mapping (docs/formats.md#gltf-20 has the table and the reasons), with base colour b, metallic m,
-roughness r, the dielectric's normal-incidence reflectance F0 = ((ior − 1)/(ior + 1))² (0.04 at ior 1.5),
-transmission t and g = (1 − r)² the share of the specular reflection that is a sharp mirror:
+The mapping (docs/formats.md#gltf-20 has the table): each glTF material becomes a lumos `principled` material
+(`scene.materials.Principled`: glTF's own metallic–roughness BRDF, which `path` reads exactly) with its factors
+(baseColorFactor, metallicFactor, roughnessFactor, KHR_materials_ior, _specular, _transmission), and textures:
 
-    kd      = b·(1 − m)·(1 − F0)·(1 − t)     the dielectric's diffuse part (what the specular does not take)
-    ka      = kd + F0s                        all that a uniform surround (the ambient Ia) sends back
-    kt      = b·(1 − m)·(1 − F0)·t           KHR_materials_transmission, with ior and fresnel: true
-    ks      = F0s·(1 − g),  kr = F0s·g        F0s = F0·(1 − m) + b·m, the specular colour (metals: tinted)
-    shininess = (1/r⁴ − 1)/2 in [1, 10⁴]     Beckmann α = r², Blinn-Phong n = 2/α² − 2 (Walter et al. 2007),
-                                              and a Phong lobe about R is as wide as a Blinn one of 4× the exponent
-    emission = emissiveFactor·emissiveStrength
+    baseColorTexture          apply_to [base_color, and the classic ka, kd, ks, kr it tints], multiply
+    metallicRoughnessTexture  apply_to [metallic_roughness] (raw: blue × metallic, green × roughness)
+    occlusionTexture          apply_to [occlusion] (raw red × ka: the local methods' ambient)
+    emissiveTexture           apply_to [emission], multiply, emission = emissiveFactor·emissiveStrength
+    normalTexture             bump: {type: normal, strength: scale}
 
-so kd + ks + kr + kt ≤ 1 (the path tracer's energy bound) for every glTF material.
+The local methods read its classic reading (`Principled.classic`: a Phong stand-in, kd + ks + kr + kt <= 1),
+which takes the factors alone (not the metallic–roughness map). alphaMode BLEND with α < 1 makes the material
+that classic reading with a see-through share, in every method.
 
 Images: a texture's file is the image file itself (an absolute path) when the glTF names one; an embedded image
 (a data URI, or a bufferView of a .glb) is written once, as its own PNG/JPEG bytes, to a cache folder made for
@@ -34,6 +34,8 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from ..scene.materials import Principled
 
 #: sampler wrap modes
 _REPEAT, _CLAMP, _MIRROR = 10497, 33071, 33648
@@ -74,63 +76,71 @@ class Materials:
         at_pbr = f"{at}.pbrMetallicRoughness"
         base = np.clip(doc.numbers(pbr, "baseColorFactor", at_pbr, [1.0, 1.0, 1.0, 1.0], 4), 0.0, 1.0)
         rgb, alpha = base[:3], float(base[3])
-        metallic = doc.number(pbr, "metallicFactor", at_pbr, 1.0, 0.0, 1.0)
-        rough = doc.number(pbr, "roughnessFactor", at_pbr, 1.0, 0.0, 1.0)
         ext = doc.obj(item, "extensions", at)
-        ior = doc.number(doc.obj(ext, "KHR_materials_ior", f"{at}.extensions"), "ior",
-                         f"{at}.extensions.KHR_materials_ior", 1.5, 0.0, 1e3)
+        at_ext = f"{at}.extensions"
+        ior = doc.number(doc.obj(ext, "KHR_materials_ior", at_ext), "ior", f"{at_ext}.KHR_materials_ior", 1.5, 0.0,
+                         1e3)
         ior = 1.5 if ior == 0.0 else max(ior, 1.0)  # 0 and values below 1 are not physical dielectrics
-        transmission = doc.number(doc.obj(ext, "KHR_materials_transmission", f"{at}.extensions"),
-                                  "transmissionFactor", f"{at}.extensions.KHR_materials_transmission", 0.0, 0.0, 1.0)
-        f0 = ((ior - 1.0) / (ior + 1.0)) ** 2
-        dielectric = (1.0 - metallic) * (1.0 - f0)
-        specular = f0 * (1.0 - metallic) + rgb * metallic
-        g = (1.0 - rough) ** 2
-        kd = rgb * dielectric * (1.0 - transmission)
-        kt = rgb * dielectric * transmission
-        mat = {"ka": kd + specular, "kd": kd, "ks": specular * (1.0 - g), "kr": specular * g,
-               "shininess": shininess(rough)}
-        if transmission > 0:
-            mat.update(kt=kt, ior=ior, fresnel=True)
-        strength = doc.number(doc.obj(ext, "KHR_materials_emissive_strength", f"{at}.extensions"),
-                              "emissiveStrength", f"{at}.extensions.KHR_materials_emissive_strength", 1.0, 0.0)
+        spec = doc.obj(ext, "KHR_materials_specular", at_ext)
+        at_spec = f"{at_ext}.KHR_materials_specular"
+        model = {
+            "base_color": rgb.tolist(),
+            "metallic": doc.number(pbr, "metallicFactor", at_pbr, 1.0, 0.0, 1.0),
+            "roughness": doc.number(pbr, "roughnessFactor", at_pbr, 1.0, 0.0, 1.0),
+            "ior": ior,
+            "specular": doc.number(spec, "specularFactor", at_spec, 1.0, 0.0, 1.0),
+            "specular_color": np.clip(doc.numbers(spec, "specularColorFactor", at_spec, [1.0, 1.0, 1.0], 3), 0.0,
+                                      None).tolist(),
+            "transmission": doc.number(doc.obj(ext, "KHR_materials_transmission", at_ext), "transmissionFactor",
+                                       f"{at_ext}.KHR_materials_transmission", 0.0, 0.0, 1.0),
+        }
+        for key in ("specularTexture", "specularColorTexture"):
+            if key in spec:
+                doc.warn(f"{at_spec}.{key}: not read (lumos's principled material takes the specular factors)")
+        if "transmissionTexture" in doc.obj(ext, "KHR_materials_transmission", at_ext):
+            doc.warn(f"{at_ext}.KHR_materials_transmission.transmissionTexture: not read (the factor is)")
+        mat = {"principled": model}
+        strength = doc.number(doc.obj(ext, "KHR_materials_emissive_strength", at_ext), "emissiveStrength",
+                              f"{at_ext}.KHR_materials_emissive_strength", 1.0, 0.0)
         emission = np.clip(doc.numbers(item, "emissiveFactor", at, [0.0, 0.0, 0.0], 3), 0.0, None) * strength
         if emission.any():
             mat["emission"] = emission
+        classic = Principled(**model).classic()  # what the local methods read: its textures tint these
         textures = []
         base_tex = self._texture(pbr, "baseColorTexture", at_pbr) if "baseColorTexture" in pbr else None
         if base_tex is not None:
-            targets = [k for k in ("ka", "kd", "ks", "kr", "kt") if k in mat and np.any(mat[k] > 0)]
-            targets = [k for k in targets if k != "kt"]  # lumos textures tint ka, kd, ks, kr (kt keeps b)
-            if targets:
-                tex = dict(base_tex[0], apply_to=targets)
-                if not all(np.all(mat[k] == 1.0) for k in targets):  # replace equals multiply when they are 1
-                    tex["mode"] = "multiply"
-                textures.append(tex)
+            targets = [k for k in ("ka", "kd", "ks", "kr") if np.any(np.asarray(classic[k]) > 0)]
+            textures.append(dict(base_tex[0], apply_to=["base_color", *targets], mode="multiply"))
+        if "metallicRoughnessTexture" in pbr:
+            mr = self._texture(pbr, "metallicRoughnessTexture", at_pbr)
+            if mr is not None:
+                textures.append(dict(mr[0], apply_to=["metallic_roughness"]))
         if "emissiveTexture" in item and emission.any():
             emissive = self._texture(item, "emissiveTexture", at)
             if emissive is not None:
                 textures.append(dict(emissive[0], apply_to=["emission"], mode="multiply"))
-        self._alpha(item, at, mat, alpha, base_tex, textures)
+        if "occlusionTexture" in item:
+            occlusion = self._texture(item, "occlusionTexture", at)
+            if occlusion is not None:
+                if doc.number(doc.obj(item, "occlusionTexture", at), "strength", f"{at}.occlusionTexture", 1.0) != 1:
+                    doc.warn(f"{at}.occlusionTexture.strength: read as 1")
+                textures.append(dict(occlusion[0], apply_to=["occlusion"]))
+        self._alpha(item, at, mat, classic, alpha, base_tex, textures)
         if textures:
             mat["texture"] = textures[0] if len(textures) == 1 else textures
         if "normalTexture" in item:
             normal = self._texture(item, "normalTexture", at)
             if normal is not None:
                 info = doc.obj(item, "normalTexture", at)
-                strength = doc.number(info, "scale", f"{at}.normalTexture", 1.0)
+                scale = doc.number(info, "scale", f"{at}.normalTexture", 1.0)
                 bump = {k: v for k, v in normal[0].items() if k != "apply_to"}
-                mat["bump"] = dict(bump, type="normal", strength=strength)
-        for key in ("metallicRoughnessTexture",):
-            if key in pbr:
-                self.doc.warn(f"{at_pbr}.{key}: not read (lumos's material takes the metallic and roughness factors)")
-        if "occlusionTexture" in item:
-            self.doc.warn(f"{at}.occlusionTexture: not read (lumos computes occlusion where the method does)")
+                mat["bump"] = dict(bump, type="normal", strength=scale)
         return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in mat.items()}
 
-    def _alpha(self, item: dict, at: str, mat: dict, alpha: float, base_tex, textures: list) -> None:
+    def _alpha(self, item: dict, at: str, mat: dict, classic: dict, alpha: float, base_tex, textures: list) -> None:
         """alphaMode MASK: the base texture's alpha as an opacity cut-out (lumos cuts at 0.5); BLEND: the same
-        cut-out, and the factor's alpha as a see-through share kt = 1 − α (ior 1) with the rest scaled by α."""
+        cut-out, and the factor's alpha as a see-through share kt = 1 − α (ior 1) with the rest scaled by α: the
+        classic reading (`classic`) of the material, which then stands for it in every method (`path` too)."""
         mode = item.get("alphaMode", "OPAQUE")
         if mode not in ("OPAQUE", "MASK", "BLEND"):
             raise self.doc.error(f"{at}.alphaMode", f"must be OPAQUE, MASK or BLEND, got {mode!r}")
@@ -142,12 +152,19 @@ class Materials:
         if base_tex is not None and base_tex[1]:  # the image has an alpha channel
             textures.append(dict(base_tex[0], apply_to=["opacity"]))
         coverage = alpha if mode == "BLEND" else float(alpha >= cutoff)
-        if coverage < 1.0:
+        if coverage < 1.0:  # a see-through share: the classic model's kt (no principled model draws it)
+            del mat["principled"]
+            for k in ("ka", "kd", "ks", "kr", "kt", "shininess", "ior"):
+                mat[k] = classic.get(k, 0.0 if k != "ior" else 1.0)
             for k in ("ka", "kd", "ks", "kr", "kt", "emission"):
                 if k in mat:
                     mat[k] = np.asarray(mat[k]) * coverage
-            mat["kt"] = np.asarray(mat.get("kt", 0.0)) + (1.0 - coverage)
-            mat.setdefault("ior", 1.0)
+            mat["kt"] = np.asarray(mat["kt"]) + (1.0 - coverage)
+            if classic.get("fresnel"):
+                mat["fresnel"] = True
+            for tex in textures:
+                tex["apply_to"] = [k for k in tex["apply_to"] if k not in ("base_color", "metallic_roughness")]
+            textures[:] = [tex for tex in textures if tex["apply_to"]]
 
     # ---- textures and images
 
@@ -169,7 +186,7 @@ class Materials:
         out = {"type": "image", "file": image[0], "wrap": self._wrap(tex, at_tex)}
         transform = doc.obj(doc.obj(info, "extensions", at), "KHR_texture_transform", f"{at}.extensions")
         coord = transform.get("texCoord", info.get("texCoord", 0))
-        if coord != 0:
+        if coord != 0 and not self._same_as_first_uvs(coord):
             doc.warn(f"{at}: texCoord {coord}: lumos reads TEXCOORD_0 only")
         if transform:
             at_t = f"{at}.extensions.KHR_texture_transform"
@@ -187,6 +204,14 @@ class Materials:
             if offset != [0.0, 0.0]:
                 out["offset"] = offset
         return out, image[1]
+
+    def _same_as_first_uvs(self, coord) -> bool:
+        """Whether every primitive that has TEXCOORD_<coord> has TEXCOORD_0's accessor there (exporters often
+        point both sets at one accessor), so that reading TEXCOORD_0 reads the set the texture names."""
+        attributes = [prim.get("attributes", {}) for mesh in self.doc.json.get("meshes", []) if isinstance(mesh, dict)
+                      for prim in mesh.get("primitives", []) if isinstance(prim, dict)]
+        named = [a for a in attributes if isinstance(a, dict) and f"TEXCOORD_{coord}" in a]
+        return bool(named) and all(a[f"TEXCOORD_{coord}"] == a.get("TEXCOORD_0") for a in named)
 
     def _wrap(self, tex: dict, at: str) -> str:
         if "sampler" not in tex:

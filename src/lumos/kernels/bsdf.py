@@ -12,6 +12,7 @@ A metal (MODEL_CONDUCTOR) replaces the Phong lobe by a GGX microfacet lobe with 
 lobe (or the mirror lobe) with the dielectric's Fresnel factor, and the base's light is what the coat lets in and
 out, t(cos θi)·t(cos θo)·kd/(π·η²·(1 − Fdr)), t = 1 − the coat's directional reflectance and Fdr its internal
 diffuse reflectance (the tables `compile.plastic` writes into the row), as Mitsuba 3's `roughplastic` reads it.
+glTF's metallic–roughness material (MODEL_PRINCIPLED) is `kernels.principled`'s diffuse and glossy lobes.
 Glass (MODEL_DIELECTRIC) is one lobe: when rough, the glossy one (ks = 1), GGX reflection and refraction
 (`microfacet.eval_ggx_dielectric`, Walter et al. 2007) on both sides of the surface, times its reflected or
 transmitted tint; when smooth, the dielectric one (kt = 1) with its own indices and tints (`methods.path_trace`).
@@ -44,6 +45,7 @@ from .layout import (
     MODEL_CONDUCTOR,
     MODEL_DIELECTRIC,
     MODEL_PLASTIC,
+    MODEL_PRINCIPLED,
 )
 from .microfacet import (
     eval_ggx,
@@ -53,6 +55,7 @@ from .microfacet import (
     sample_ggx,
     sample_ggx_dielectric,
 )
+from .principled import eval_principled
 from .sampling import turn
 from .vec import dot, madd, mul, orthonormal_basis
 
@@ -155,6 +158,8 @@ def eval_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, wi):
     model = mat[MAT_MODEL]
     if model == MODEL_DIELECTRIC:
         return eval_dielectric(kd, ks, mat, p_d, p_s, eta, n, wo, wi)
+    if model == MODEL_PRINCIPLED:  # (its Fresnel factors weigh both lobes: ks is not read)
+        return eval_principled(kd, mat, p_d, p_s, n, wo, wi)
     cos_i = dot(n, wi)
     if cos_i <= 0.0:
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0

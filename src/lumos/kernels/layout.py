@@ -64,11 +64,19 @@ MAT_FDR = 38  # plastic: the coat's internal diffuse reflectance (light from the
 MAT_COAT = 39
 MAT_COAT_SIZE = 64
 MAT_SIZE = MAT_COAT + MAT_COAT_SIZE
+# principled (glTF's metallic–roughness, `kernels.principled`): its factors, which its textures multiply per hit
+MAT_BASE = 29  # the base colour b per channel
+MAT_METALLIC = 32  # m
+MAT_ROUGHNESS = 33  # perceptual roughness r (GGX α = r², written into MAT_ALPHA per hit)
+MAT_TRANSMISSION = 34  # t, the share of the dielectric's base that is smooth glass of index MAT_IOR
+MAT_F0 = 35  # the dielectric's reflectance head-on per channel (from ior, specular, specular_color)
+MAT_F90 = 38  # and at grazing incidence (KHR_materials_specular's factor)
 
 MODEL_CLASSIC = 0  # kd, ks/shininess, kr, kt read as kernels.bsdf says
 MODEL_CONDUCTOR = 1  # a metal: GGX microfacets (a mirror when α = 0) with the Fresnel factor of η + ik
 MODEL_PLASTIC = 2  # kd under a dielectric coat of index MAT_ETA: GGX microfacets (a mirror when α = 0)
 MODEL_DIELECTRIC = 3  # glass of relative index MAT_ETA: GGX reflection and refraction (smooth glass when α = 0)
+MODEL_PRINCIPLED = 4  # glTF's metallic–roughness: a metal and a dielectric over a Lambertian base, mixed by metallic
 
 # The ambient light Ia (SceneArrays.ambient): a constant (row 0) plus, with an environment and no `ambient` given,
 # its irradiance E(n)/π in the nine real spherical harmonics of bands 0-2 (Ramamoorthi & Hanrahan 2001: the

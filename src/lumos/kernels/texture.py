@@ -34,7 +34,9 @@ Everything is a tuple of float64; nothing allocates.
                    are black and white, so that channel 0 of its `texture_rgb` is its height
     TEX_OFFSET, TEX_WIDTH, TEX_HEIGHT   image: its first texel in tex_pixels, and its size in texels
     TEX_APPLY      bit mask of the coefficients the colour applies to: APPLY_KA | APPLY_KD | APPLY_KS | APPLY_KR |
-                   APPLY_EMISSION, or APPLY_OPACITY alone (a coverage row: channel 0 is α); 0 for bump maps
+                   APPLY_EMISSION | APPLY_BASE (a principled material's base colour), or APPLY_OPACITY alone (a
+                   coverage row: channel 0 is α), or APPLY_METAL_ROUGH alone (raw texels: blue multiplies a
+                   principled material's metallic, green its roughness); 0 for bump maps
     TEX_MODE       MODE_REPLACE (the coefficient becomes the colour) or MODE_MULTIPLY (is multiplied by it)
     TEX_SHIFT_U/V  the offset added to the scaled coordinates: (s, t) = (scale_u·u + shift_u, scale_v·v + shift_v)
     TEX_BUMP_TYPE  bump maps: BUMP_HEIGHT (Blinn bumps of a height field) or BUMP_NORMAL (a tangent-space normal
@@ -145,6 +147,10 @@ APPLY_KS = 4
 APPLY_KR = 8
 APPLY_EMISSION = 16
 APPLY_OPACITY = 32
+APPLY_BASE = 64  # a principled material's base colour (`kernels.principled`)
+APPLY_METAL_ROUGH = 128  # its metallic (blue) and roughness (green), raw texels
+#: the bits `material_coeffs` reads
+APPLY_COEFFS = APPLY_KA | APPLY_KD | APPLY_KS | APPLY_KR | APPLY_EMISSION
 
 # TEX_MODE values (colour textures)
 MODE_REPLACE = 0
@@ -404,8 +410,8 @@ def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
         return ka, kd, ks, kr, ke
     for row in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
         mask = np.int64(tex.tex_info[row, TEX_APPLY])
-        if (mask & ~APPLY_OPACITY) == 0:
-            continue  # a coverage row
+        if (mask & APPLY_COEFFS) == 0:
+            continue  # a coverage row, or one a principled material reads (kernels.principled)
         color = texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy)
         mode = tex.tex_info[row, TEX_MODE]
         if mask & APPLY_KA:

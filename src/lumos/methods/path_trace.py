@@ -60,17 +60,21 @@ from ..kernels.layout import (
     MAT_KT,
     MAT_MODEL,
     MAT_ONE_SIDED,
+    MAT_SIZE,
     MAT_TINT,
     MAT_TINT_T,
     MODEL_CLASSIC,
     MODEL_DIELECTRIC,
+    MODEL_PRINCIPLED,
 )
+from ..kernels.principled import principled_at
 from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
 from ..kernels.sobol import pair_seed, sobol_block
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
 from ..kernels.bump import bump_frame, bump_normal
 from ..kernels.texture import material_coeffs
+from ..kernels.vec import dot
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
 
 #: Bounces before Russian roulette may end a path (Mitsuba's default rr_depth).
@@ -104,9 +108,10 @@ KEEP_SQUARES, KEEP_GUIDES, KEEP_DIRECT = 1, 2, 4
 
 @njit_alloc
 def _scratch():
-    """Per-thread work arrays: the BVH stack and the media the path is inside (object, index of refraction)."""
+    """Per-thread work arrays: the BVH stack, the media the path is inside (object, index of refraction), and a
+    material row for the hit's own values (`kernels.principled.principled_at`)."""
     return (np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK), np.empty(MAX_MEDIA, np.int64),
-            np.empty(MAX_MEDIA))
+            np.empty(MAX_MEDIA), np.empty(MAT_SIZE))
 
 
 @njit_inline
@@ -179,7 +184,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
     denoiser's guides), the emission of the first hit itself (the light seen directly, which the denoiser
     leaves alone), and the direct light: the part of rgb that `max_depth: 0` gathers — the emission (and
     background) found at vertices 0 and 1 and the light sampled at vertex 0 — which the `direct` AOV holds)."""
-    stack, stack_t, media_obj, media_ior = scratch
+    stack, stack_t, media_obj, media_ior, hit_row = scratch
     L0 = L1 = L2 = 0.0
     b0 = b1 = b2 = 1.0  # throughput
     eta_scale = 1.0  # 1/η² of the refractions so far: roulette looks at the throughput without them
@@ -240,10 +245,15 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
         if mat[MAT_MODEL] == MODEL_CLASSIC:  # (a physical model conserves energy by its own construction)
             kd, ks, kr, kt = conserve_energy(kd, ks, kr, kt)
-        p_d, p_s, p_r, p_t = lobe_probs(kd, ks, kr, kt)
+        wd, ws = kd, ks  # the weights the lobe choice draws by
+        if mat[MAT_MODEL] == MODEL_PRINCIPLED:  # its factors times its textures, in the thread's own row
+            kd, kt, wd, ws = principled_at(tex, mat, hit_row, u, v, p, dot(n_s, wo))
+            mat = hit_row
+            kr = (0.0, 0.0, 0.0)  # (a texture's classic targets do not reach it)
+        p_d, p_s, p_r, p_t = lobe_probs(wd, ws, kr, kt)
         if depth == 0:
-            albedo = (min(kd[0] + ks[0] + kr[0] + kt[0], 1.0), min(kd[1] + ks[1] + kr[1] + kt[1], 1.0),
-                      min(kd[2] + ks[2] + kr[2] + kt[2], 1.0))
+            albedo = (min(wd[0] + ws[0] + kr[0] + kt[0], 1.0), min(wd[1] + ws[1] + kr[1] + kt[1], 1.0),
+                      min(wd[2] + ws[2] + kr[2] + kt[2], 1.0))
             normal = n_s
         if p_d + p_s + p_r + p_t == 0.0:
             break  # black: nothing leaves

@@ -171,6 +171,49 @@ class Dielectric(_GGXWidths):
         return {**out, "ks": f0, "shininess": phong_exponent(alpha)}
 
 
+class Principled(StrictModel):
+    """glTF 2.0's metallic–roughness material (its specification's Appendix B, with KHR_materials_ior,
+    _specular and _transmission), read exactly by `path`: a base colour b, `metallic` m and perceptual
+    `roughness` r (GGX α = r²); a mix by m of a metal (GGX, Schlick's Fresnel from F0 = b) and a dielectric (the
+    same GGX lobe with F0 = ((ior − 1)/(ior + 1))²·specular_color·specular, F90 = specular, over a Lambertian
+    base b weighted by 1 − max F). `transmission` t turns that share of the dielectric's base into smooth glass
+    of index `ior`. Textures reach it through `apply_to: [base_color]` (multiplies b) and
+    `[metallic_roughness]` (a glTF metallicRoughnessTexture: its blue multiplies m, its green r)."""
+
+    base_color: ShareColor = (1.0, 1.0, 1.0)
+    metallic: Annotated[float, Field(ge=0.0, le=1.0)] = 1.0
+    roughness: Annotated[float, Field(ge=0.0, le=1.0)] = 1.0
+    ior: Annotated[float, Field(ge=1.0, le=1e3)] = 1.5
+    specular: Annotated[float, Field(ge=0.0, le=1.0)] = 1.0
+    specular_color: Color = (1.0, 1.0, 1.0)
+    transmission: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
+
+    @property
+    def f0(self) -> tuple[float, float, float]:
+        """The dielectric's reflectance head-on per channel: min(((ior − 1)/(ior + 1))²·specular_color, 1)·specular."""
+        base = ((self.ior - 1.0) / (self.ior + 1.0)) ** 2
+        return tuple(min(base * c, 1.0) * self.specular for c in self.specular_color)
+
+    def classic(self) -> dict:
+        """The classic coefficients the local methods read (docs/formats.md#gltf-20), with g = (1 − r)² the share
+        of the specular reflection that is a sharp mirror and F0s = F0·(1 − m) + b·m its colour:
+        kd = b·(1 − m)·(1 − F0)·(1 − t), kt = b·(1 − m)·(1 − F0)·t, ks = F0s·(1 − g), kr = F0s·g, ka = kd + F0s,
+        and the Phong exponent of the GGX width r² (`phong_exponent`), so kd + ks + kr + kt <= 1."""
+        import numpy as np
+
+        b, m, t = np.asarray(self.base_color, dtype=float), self.metallic, self.transmission
+        f0 = np.asarray(self.f0)
+        dielectric = (1.0 - m) * (1.0 - f0)
+        specular = f0 * (1.0 - m) + b * m
+        g = (1.0 - self.roughness) ** 2
+        kd = b * dielectric * (1.0 - t)
+        out = {"ka": kd + specular, "kd": kd, "ks": specular * (1.0 - g), "kr": specular * g,
+               "shininess": phong_exponent(self.roughness ** 2)}
+        if t > 0.0:
+            out.update(kt=b * dielectric * t, ior=self.ior, fresnel=True)
+        return {k: tuple(float(x) for x in v) if isinstance(v, np.ndarray) else v for k, v in out.items()}
+
+
 def phong_exponent(alpha: float) -> float:
     """The Phong exponent whose lobe is about as wide as a GGX (or Beckmann) lobe of width α: Blinn-Phong
     n_B = 2/α² − 2 and a Phong lobe about the mirror direction of 4× narrower angle, n = n_B/4; in [1, 10⁴]."""
@@ -205,18 +248,33 @@ class Material(StrictModel):
     #: glass (smooth or rough) read physically by `path`; the local methods read the kt/ior glass it implies
     #: (`Dielectric.classic`) unless given
     dielectric: Optional[Dielectric] = None
+    #: glTF's metallic–roughness material read exactly by `path`; the local methods read its classic reading
+    #: (`Principled.classic`) unless given
+    principled: Optional[Principled] = None
 
     @model_validator(mode="after")
     def _one_model(self):
-        given = [name for name in ("conductor", "plastic", "dielectric") if getattr(self, name) is not None]
+        given = [name for name in PHYSICAL_MODELS if getattr(self, name) is not None]
         if len(given) > 1:
-            raise ValueError(f"give one of conductor, plastic and dielectric, not {' and '.join(given)}")
+            raise ValueError(f"give one of {', '.join(PHYSICAL_MODELS)}, not {' and '.join(given)}")
+        for tex in self.textures:
+            reads = {"base_color", "metallic_roughness"} & set(tex.apply_to)
+            if reads and self.principled is None:
+                raise ValueError(f"a texture applied to {' and '.join(sorted(reads))} needs a principled material")
         return self
+
+    def classic(self) -> dict:
+        """The classic coefficients the local methods (and radiosity) read: ka, kd, ks, shininess, kr, kt, ior
+        and fresnel as given, and where not given the physical model's classic reading (its `classic()`)."""
+        out = {k: getattr(self, k) for k in ("ka", "kd", "ks", "shininess", "kr", "kt", "ior", "fresnel")}
+        if self.physical is not None:
+            out.update({k: v for k, v in self.physical.classic().items() if k not in self.model_fields_set})
+        return out
 
     @property
     def physical(self):
-        """The physical model the path tracer reads (a Conductor, Plastic or Dielectric), or None."""
-        return self.conductor or self.plastic or self.dielectric
+        """The physical model the path tracer reads (a Conductor, Plastic, Dielectric or Principled), or None."""
+        return self.conductor or self.plastic or self.dielectric or self.principled
 
     @field_validator("texture", mode="after")
     @classmethod
@@ -233,7 +291,11 @@ class Material(StrictModel):
         return list(self.texture) if isinstance(self.texture, list) else [self.texture]
 
 
-TEXTURE_TARGETS = ("ka", "kd", "ks", "kr", "emission", "opacity")
+#: the material's physical models: one at most
+PHYSICAL_MODELS = ("conductor", "plastic", "dielectric", "principled")
+TEXTURE_TARGETS = ("ka", "kd", "ks", "kr", "emission", "opacity", "base_color", "metallic_roughness", "occlusion")
+#: targets whose texels are data, not colour: read raw (not decoded from sRGB), and alone in their texture
+DATA_TARGETS = ("metallic_roughness", "occlusion")
 
 
 class _UVMap(StrictModel):
@@ -273,12 +335,15 @@ class Texture(_UVMap):
     multiplying (`mode: multiply`) the coefficients named in `apply_to`. `image`: a PNG/JPEG file (relative to
     the scene file), bilinearly filtered; `checker`, `stripes` (along u) and `noise` (gradient noise, blending
     `colors`) are procedural. `apply_to: [opacity]` reads the coverage α instead of a colour: an image's alpha
-    channel (its luminance when it has none), a pattern's luminance; α < 0.5 is a cut-out hole."""
+    channel (its luminance when it has none), a pattern's luminance; α < 0.5 is a cut-out hole.
+
+    A principled material's textures: `base_color` multiplies (or replaces) its base colour, `metallic_roughness`
+    is a glTF metallicRoughnessTexture (raw values: blue multiplies metallic, green roughness), `occlusion` a glTF
+    occlusionTexture (its raw red multiplies ka: the ambient light a crevice lets in, for the local methods)."""
 
     type: Literal["image", "checker", "stripes", "noise"]
     colors: tuple[Color, Color] = ((0.9, 0.9, 0.9), (0.1, 0.1, 0.1))
-    apply_to: list[Literal["ka", "kd", "ks", "kr", "emission", "opacity"]] = Field(
-        default_factory=lambda: ["ka", "kd"])
+    apply_to: list[Literal[TEXTURE_TARGETS]] = Field(default_factory=lambda: ["ka", "kd"])
     mode: Literal["replace", "multiply"] = "replace"
     _noun: ClassVar[str] = "texture"
 
@@ -290,7 +355,12 @@ class Texture(_UVMap):
     @model_validator(mode="after")
     def _check(self):
         if not self.apply_to:
-            raise ValueError("apply_to must name at least one of ka, kd, ks, kr, emission, opacity")
+            raise ValueError(f"apply_to must name at least one of {', '.join(TEXTURE_TARGETS)}")
+        data = [t for t in self.apply_to if t in DATA_TARGETS]
+        if data and len(set(self.apply_to)) > 1:
+            raise ValueError(f"a texture applied to {data[0]} holds data, not colour: apply it to nothing else")
+        if data and self.type != "image":
+            raise ValueError(f"a texture applied to {data[0]} is an image (a glTF map)")
         if "kr" in self.apply_to and self.type != "image" and max(max(c) for c in self.colors) > 1.0:
             raise ValueError("colors: a texture applied to kr gives a share of light reflected: each channel must "
                              "be in [0, 1]")

@@ -1,0 +1,114 @@
+"""The `principled` material (glTF's metallic–roughness) in every method: `path` reads it exactly
+(`kernels.principled`, tested there against the specification), its textures per hit; the local methods and
+radiosity read its classic stand-in (`Principled.classic`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import lumos
+from lumos.scene.materials import Material, Principled
+from lumos.tonemap import srgb_decode
+
+
+def scene(material, env=(1.0, 1.0, 1.0), light=True):
+    """A sphere over a floor under an even sky and a point light."""
+    return {"camera": {"position": [0, 1.2, 4], "look_at": [0, 0.4, 0], "fov": 35},
+            "environment": {"color": list(env)},
+            "lights": [{"type": "point", "position": [2, 4, 3], "intensity": 6}] if light else [],
+            "materials": {"m": material, "floor": {"kd": 0.5}},
+            "objects": [{"type": "sphere", "center": [0, 0.5, 0], "radius": 0.5, "material": "m"},
+                        {"type": "rect", "corner": [-3, 0, 3], "edge_u": [6, 0, 0], "edge_v": [0, 0, -6],
+                         "material": "floor"}]}
+
+
+def path(material, **kw):
+    return lumos.render(scene(material), method="path", width=32, height=24, spp=16, seed=3, **kw).array
+
+
+def test_a_dielectric_without_specular_is_lambert_pixel_for_pixel():
+    """specular 0 makes F0 = F90 = 0: no glossy lobe, and the base weighs 1 − 0: exactly kd = b."""
+    b = [0.7, 0.5, 0.3]
+    got = path({"principled": {"base_color": b, "metallic": 0.0, "roughness": 0.4, "specular": 0.0}})
+    np.testing.assert_array_equal(got, path({"kd": b}))
+
+
+def png(path, rgb):
+    Image.fromarray(np.full((4, 4, 3), rgb, np.uint8)).save(path)
+    return str(path)
+
+
+def test_textures_multiply_the_factors_per_hit(tmp_path):
+    """A metallic–roughness map of blue 0 and green 255 turns a metal of roughness 0.6 into the dielectric of
+    roughness 0.6 (raw texels: 255 is 1, no sRGB curve), and a base colour map multiplies the base colour by its
+    decoded texels."""
+    mr = png(tmp_path / "mr.png", (0, 255, 0))
+    base = png(tmp_path / "base.png", (200, 120, 90))
+    textured = {"principled": {"metallic": 1.0, "roughness": 0.6},
+                "texture": [{"type": "image", "file": base, "apply_to": ["base_color"], "mode": "multiply"},
+                            {"type": "image", "file": mr, "apply_to": ["metallic_roughness"]}]}
+    decoded = srgb_decode(np.array([200, 120, 90]) / 255.0).astype(np.float32).astype(np.float64)
+    plain = {"principled": {"base_color": decoded.tolist(), "metallic": 0.0, "roughness": 0.6}}
+    np.testing.assert_allclose(path(textured), path(plain), rtol=1e-5, atol=1e-6)
+    assert not np.allclose(path(textured), path({"principled": {"metallic": 1.0, "roughness": 0.6}}), rtol=0.05)
+
+
+def test_a_metal_reflects_its_base_colour_by_schlicks_curve():
+    """A nearly smooth metal sphere alone under an even white sky: each pixel is the surface's directional albedo
+    there, Schlick's F(cos θ) = b + (1 − b)(1 − cos θ)⁵ from F0 = b (the lobe at roughness 0.05 loses nothing
+    measurable), b at the centre, whiter towards the rim."""
+    b = np.array([1.0, 0.78, 0.34])
+    n = 33
+    img = lumos.render({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov": 30},
+                        "environment": {"color": [1, 1, 1]},
+                        "materials": {"m": {"principled": {"base_color": b.tolist(), "metallic": 1.0,
+                                                           "roughness": 0.05}}},
+                        "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}]},
+                       method="path", width=n, height=n, spp=32, seed=1).array
+    t = np.tan(np.radians(15.0))
+    x, y = np.meshgrid((np.arange(n) + 0.5) / n * 2 - 1, 1 - (np.arange(n) + 0.5) / n * 2)
+    d = np.stack([x * t, y * t, -np.ones_like(x)], axis=-1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    o = np.array([0.0, 0.0, 5.0])
+    bo = d @ o
+    disc = bo**2 - (o @ o - 1.0)
+    hit = disc > 0
+    p = o + (-bo - np.sqrt(np.where(hit, disc, 0.0)))[..., None] * d
+    cos = np.einsum("ijk,ijk->ij", -d, p)
+    inner = hit & (cos > 0.5)  # (near the rim a pixel spans too wide a range of angles)
+    want = b + (1.0 - b) * (1.0 - cos[..., None]) ** 5
+    err = np.abs(img - want)[inner]
+    assert err.mean() < 0.004 and err.max() < 0.05, (err.mean(), err.max())  # (a few noisy pixels at 32 spp)
+    ring = hit & (cos > 0.25) & (cos < 0.35)  # the rim does whiten (where Schlick's curve rises)
+    assert img[ring][:, 2].mean() > b[2] + 0.1, img[ring][:, 2].mean()
+
+
+@pytest.mark.parametrize("method", ["raycast", "whitted", "raster"])
+def test_local_methods_read_the_classic_stand_in(method):
+    principled = {"base_color": [0.8, 0.3, 0.2], "metallic": 0.3, "roughness": 0.5}
+    classic = Principled(**principled).classic()
+    a = lumos.render(scene({"principled": principled}), method=method, width=24, height=18).array
+    b = lumos.render(scene(classic), method=method, width=24, height=18).array
+    np.testing.assert_array_equal(a, b)
+
+
+def test_given_classic_coefficients_win_over_the_stand_in():
+    mat = Material(principled={"metallic": 1.0, "roughness": 0.2}, kd=0.5)
+    assert mat.classic()["kd"] == (0.5, 0.5, 0.5) and mat.classic()["ks"] == Principled(roughness=0.2).classic()["ks"]
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"principled": {"metallic": 1.5}}, "metallic"),
+    ({"principled": {"roughness": -0.1}}, "roughness"),
+    ({"principled": {}, "conductor": {"metal": "Au"}}, "give one of"),
+    ({"kd": 0.5, "texture": {"type": "checker", "apply_to": ["base_color"]}}, "needs a principled material"),
+    ({"principled": {}, "texture": {"type": "checker", "apply_to": ["metallic_roughness"]}}, "is an image"),
+    ({"principled": {}, "texture": {"type": "image", "file": "x.png", "apply_to": ["occlusion", "kd"]}},
+     "apply it to nothing else"),
+])
+def test_bad_principled_materials_are_one_line_errors(bad, message):
+    with pytest.raises(lumos.LumosError) as info:
+        lumos.load_scene(scene(bad))
+    assert message in str(info.value) and "\n" not in str(info.value)
