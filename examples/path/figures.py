@@ -22,6 +22,8 @@ examples/raster/figures.py does). Every number in a caption is measured here and
   skipped and the numbers are still printed.
 - `denoise.png`: 16 spp before and after `denoise: true` (Intel Open Image Denoise: `pip install pyoidn`), the
   1024-spp render and Mitsuba's reference, with the RMSE of each against the reference. Skipped without pyoidn.
+- `helmet.png`: DamagedHelmet under the courtyard (helmet.yaml) beside three.js's render of the same file
+  (helmet_three.png, from helmet_viewer.py), with the mean difference over the helmet's pixels.
 - `variance.png`: the spheres box and its `variance` AOV, shown as the standard error of each pixel (of the
   variance averaged over 3x3 pixels).
 
@@ -294,8 +296,28 @@ def denoise_figure():
     save(compose(panels, 4), "denoise.png")
 
 
+def helmet_figure():
+    """helmet.yaml as its file says, beside three.js's render of the same glTF file, environment and camera
+    (docs/images/path/helmet_three.png, made by examples/path/helmet_viewer.py), with the mean difference of the
+    displayed 8-bit values over the helmet's pixels."""
+    from PIL import Image
+
+    img = render(load("helmet.yaml"), "helmet.yaml", spp=spp(load("helmet.yaml").render.spp), aov=["object_id"])
+    ours = png8(img.array, img.exposure)
+    panels = [(f"lumos path, {img.stats['spp']} spp, {img.stats['render_s']:.0f} s", ours)]
+    three = ROOT / "docs" / "images" / "path" / "helmet_three.png"
+    if three.exists():
+        theirs = np.asarray(Image.open(three).convert("RGB"))
+        helmet = img.aovs["object_id"] >= 0
+        diff = np.abs(ours.astype(float) - theirs.astype(float))[helmet].mean()
+        measured("helmet", "mean |lumos - three.js| over the helmet, 8-bit", f"{diff:.1f}")
+        panels.append(("three.js r187 (WebGL, image-based lighting)", theirs))
+    save(compose(panels, 2), "helmet.png")
+
+
 FIGURES = {"cornell": cornell_figure, "spheres": spheres_figure, "showcase": showcase_figure,
-           "bunny": bunny_figure, "veach": veach_figure, "noise": noise_figure, "denoise": denoise_figure}
+           "bunny": bunny_figure, "veach": veach_figure, "noise": noise_figure, "denoise": denoise_figure,
+           "helmet": helmet_figure}
 
 
 def main() -> None:
