@@ -13,7 +13,8 @@ import lumos
 from lumos.compile.emitters import build_emitters
 from lumos.compile import compile_scene
 from lumos.compile.environment import image_arrays, mean_radiance
-from lumos.kernels.environment import env_pdf, env_radiance, env_sample
+from lumos.kernels.environment import env_bilinear, env_pdf, env_radiance, env_sample
+from lumos.kernels.layout import ENV_COS, ENV_SIN
 
 
 def table(image, rotation=0.0):
@@ -138,9 +139,9 @@ def test_mean_radiance_weights_rows_by_solid_angle():
 
 @pytest.mark.parametrize("method", ["raycast", "whitted"])
 def test_the_ray_methods_see_the_environment_where_rays_leave(tmp_path, method):
-    """raycast and whitted look the image up where a ray leaves the scene: the camera ray along +x reads the
-    column a quarter right of the middle; whitted's mirror sphere ahead sends the centre ray back along −x, to the
-    column a quarter left of it."""
+    """raycast and whitted look the image up where a ray leaves the scene, bilinear between pixel centres: the
+    camera ray along +x reads u = 3/4, the edge between columns 11 and 12, so their mean; whitted's mirror sphere
+    ahead sends the centre ray back along −x, to u = 1/4, between columns 3 and 4."""
     h, w = 8, 16
     img = np.zeros((h, w, 3), np.float32)
     img[:, :, 0] = (np.arange(w) + 1.0) / w  # red: the column
@@ -150,11 +151,11 @@ def test_the_ray_methods_see_the_environment_where_rays_leave(tmp_path, method):
              "render": {"width": 3, "height": 3, "method": method, "spp": 1},
              "environment": {"file": str(tmp_path / "cols.npy")}}
     centre = lumos.render(scene).array[1, 1]
-    np.testing.assert_allclose(centre, [13 / 16, 0.5, 0.0], rtol=1e-6)  # +x: u = 3/4, column 12
+    np.testing.assert_allclose(centre, [12.5 / 16, 0.5, 0.0], rtol=1e-6)  # +x: u = 3/4, columns 11 and 12
     if method == "whitted":
         scene["objects"] = [{"type": "sphere", "center": [3, 0, 0], "radius": 1, "material": {"kr": 1.0}}]
         mirrored = lumos.render(scene).array[1, 1]
-        np.testing.assert_allclose(mirrored, [5 / 16, 0.5, 0.0], rtol=1e-6)  # −x: u = 1/4, column 4
+        np.testing.assert_allclose(mirrored, [4.5 / 16, 0.5, 0.0], rtol=1e-6)  # −x: u = 1/4, columns 3 and 4
 
 
 @pytest.mark.parametrize("method", ["raycast", "whitted", "raster"])
@@ -252,3 +253,33 @@ def test_compression_noise_below_zero_is_read_as_zero_and_real_negatives_are_ref
         np.save(tmp_path / "bad.npy", img)
         with pytest.raises(lumos.LumosError, match=what):
             lumos.render({**scene, "environment": {"file": str(tmp_path / "bad.npy")}})
+
+
+@numba.njit(cache=True)
+def _bilinear(pixels, info, dirs):
+    out = np.empty((dirs.shape[0], 3))
+    for k in range(dirs.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2] = env_bilinear(pixels, info, (dirs[k, 0], dirs[k, 1], dirs[k, 2]))
+    return out
+
+
+def test_the_image_seen_directly_is_bilinear_between_pixel_centres():
+    """`env_bilinear` (camera rays, rays after mirrors and glass, the raster background's twin) gives each pixel's
+    own value at its centre, the mean of two neighbours half-way (across the seam at u = 0 too), and agrees with
+    its NumPy twin (`mesh.directions.lat_long_bilinear`) everywhere, the environment's rotation included."""
+    from lumos.mesh.directions import lat_long_bilinear, lat_long_directions
+
+    h, w = 8, 16
+    pixels, _, _, info = image_arrays(sky(h, w), 0.0)
+    centres = lat_long_directions(h, w).reshape(-1, 3)
+    np.testing.assert_allclose(_bilinear(pixels, info, centres), pixels.reshape(-1, 3), rtol=1e-5, atol=1e-6)
+    seam = np.array([[0.0, 0.0, 1.0]])  # u = 0 (and 1): between the first and the last column, at mid-height
+    np.testing.assert_allclose(_bilinear(pixels, info, seam)[0],
+                               0.25 * (pixels[3, 0] + pixels[3, -1] + pixels[4, 0] + pixels[4, -1]), rtol=1e-5)
+    dirs = np.random.default_rng(4).normal(size=(500, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    pixels, _, _, info = image_arrays(sky(h, w), 30.0)
+    c, s = info[ENV_COS], info[ENV_SIN]  # (the direction turned back by the rotation, as the kernels turn it)
+    turned = np.column_stack([c * dirs[:, 0] - s * dirs[:, 2], dirs[:, 1], s * dirs[:, 0] + c * dirs[:, 2]])
+    np.testing.assert_allclose(_bilinear(pixels, info, dirs), lat_long_bilinear(pixels, turned), rtol=1e-5,
+                               atol=1e-6)

@@ -1,6 +1,7 @@
 """The environment for the path tracer: its radiance in a direction, and directions drawn in proportion to it.
 
     rgb = env_radiance(em, d)              # the lat-long pixel the world direction d falls in
+    rgb = env_bilinear(pixels, info, d)    # bilinear between pixel centres: the image as rays that see it show it
     d, pdf = env_sample(em, u1, u2)        # a direction, and its density per solid angle
     pdf = env_pdf(em, d)                   # the density env_sample draws d with
 
@@ -35,27 +36,53 @@ def _find(cdf, u):
 
 
 @njit_inline
-def _pixel(info, d):
-    """(row, column, sin θ) of the pixel the world direction d falls in."""
+def _uv(info, d):
+    """(u, v, sin θ): the lat-long coordinates in [0, 1] of the world direction d."""
     c, s = info[ENV_COS], info[ENV_SIN]
     x = c * d[0] - s * d[2]  # the environment turned back by its rotation
     z = s * d[0] + c * d[2]
     y = min(max(d[1], -1.0), 1.0)
+    return 0.5 + math.atan2(x, -z) * _INV_2PI, math.acos(y) / math.pi, math.sqrt(max(0.0, 1.0 - y * y))
+
+
+@njit_inline
+def _pixel(info, d):
+    """(row, column, sin θ) of the pixel the world direction d falls in."""
+    u, v, sin_t = _uv(info, d)
     w = np.int64(info[ENV_WIDTH])
     h = np.int64(info[ENV_HEIGHT])
-    u = 0.5 + math.atan2(x, -z) * _INV_2PI
-    v = math.acos(y) / math.pi
-    return min(np.int64(v * h), h - 1), min(max(np.int64(u * w), 0), w - 1), math.sqrt(max(0.0, 1.0 - y * y))
+    return min(np.int64(v * h), h - 1), min(max(np.int64(u * w), 0), w - 1), sin_t
+
+
+@njit
+def env_bilinear(pixels, info, d):
+    """The image seen along d as a viewer shows it: bilinear between the four nearest pixel centres (around the
+    seam in u, held at the poles in v). For rays that see the environment directly (camera rays, and rays
+    after mirrors and glass, which no light sample meets); light transport reads `env_radiance`, constant over
+    each pixel as the sampling density is."""
+    u, v, _ = _uv(info, d)
+    h, w = pixels.shape[0], pixels.shape[1]
+    x = u * w - 0.5
+    y = min(max(v * h - 0.5, 0.0), h - 1.0)
+    j = np.int64(math.floor(x))
+    i = min(np.int64(y), h - 2) if h > 1 else 0
+    fx, fy = x - j, y - i
+    j0, j1 = j % w, (j + 1) % w
+    i1 = min(i + 1, h - 1)
+    w00, w01 = (1.0 - fy) * (1.0 - fx), (1.0 - fy) * fx
+    w10, w11 = fy * (1.0 - fx), fy * fx
+    return (w00 * pixels[i, j0, 0] + w01 * pixels[i, j1, 0] + w10 * pixels[i1, j0, 0] + w11 * pixels[i1, j1, 0],
+            w00 * pixels[i, j0, 1] + w01 * pixels[i, j1, 1] + w10 * pixels[i1, j0, 1] + w11 * pixels[i1, j1, 1],
+            w00 * pixels[i, j0, 2] + w01 * pixels[i, j1, 2] + w10 * pixels[i1, j0, 2] + w11 * pixels[i1, j1, 2])
 
 
 @njit_inline
 def sky_radiance(pixels, info, background, d):
-    """What a ray leaving the scene along d sees: the environment's radiance from there (`info[ENV_PRESENT]`),
-    else the background colour."""
+    """What a ray leaving the scene along d sees: the environment's image there (`env_bilinear`;
+    `info[ENV_PRESENT]`), else the background colour."""
     if info[ENV_PRESENT] == 0.0:
         return np.float64(background[0]), np.float64(background[1]), np.float64(background[2])
-    i, j, _ = _pixel(info, d)
-    return np.float64(pixels[i, j, 0]), np.float64(pixels[i, j, 1]), np.float64(pixels[i, j, 2])
+    return env_bilinear(pixels, info, d)
 
 
 @njit_inline

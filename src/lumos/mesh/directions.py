@@ -3,6 +3,7 @@ octahedral one.
 
     d = lat_long_directions(h, w)          # (h, w, 3): the direction at each lat-long pixel's centre
     row, col = lat_long_pixel(d, h, w)     # the pixel each direction falls in (kernels.environment's twin)
+    rgb = lat_long_bilinear(pixels, d)     # the image seen along each direction, bilinear (env_bilinear's twin)
     d = equal_area_square_to_sphere(u, v)  # (..., 3) of a point of [0, 1]² (Clarberg's map, as pbrt-v4 has it)
     u, v = equal_area_sphere_to_square(d)  # its inverse
 
@@ -36,6 +37,22 @@ def lat_long_pixel(d, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
                   width - 1)
     row = np.minimum((np.arccos(np.clip(d[..., 1], -1.0, 1.0)) / np.pi * height).astype(np.int64), height - 1)
     return row, col
+
+
+def lat_long_bilinear(pixels: np.ndarray, d) -> np.ndarray:
+    """(..., C) float64: the lat-long image `pixels` (H, W, C) seen along unit directions d (..., 3), bilinear
+    between the four nearest pixel centres, around the seam in u and held at the poles in v (the twin of
+    `kernels.environment.env_bilinear`, which also turns d back by the environment's rotation first)."""
+    d = np.asarray(d, float)
+    h, w = pixels.shape[:2]
+    x = (0.5 + np.arctan2(d[..., 0], -d[..., 2]) / (2.0 * np.pi)) * w - 0.5
+    y = np.clip(np.arccos(np.clip(d[..., 1], -1.0, 1.0)) / np.pi * h - 0.5, 0.0, h - 1.0)
+    j = np.floor(x).astype(np.int64)
+    i = np.minimum(y.astype(np.int64), max(h - 2, 0))
+    fx, fy = (x - j)[..., None], (y - i)[..., None]
+    j0, j1, i1 = j % w, (j + 1) % w, np.minimum(i + 1, h - 1)
+    p = pixels.astype(np.float64)
+    return ((1 - fy) * ((1 - fx) * p[i, j0] + fx * p[i, j1]) + fy * ((1 - fx) * p[i1, j0] + fx * p[i1, j1]))
 
 
 def equal_area_square_to_sphere(u, v) -> np.ndarray:

@@ -157,7 +157,7 @@ def finish(settings, buffers: Buffers, threads: int, samples, rays: int, primary
 def background_image(environment, background, camera, width: int, height: int) -> np.ndarray:
     """float64 (H, W, 3): what a camera ray through each pixel's centre sees where it leaves the scene, for the
     methods that scan-convert (raster, radiosity's display): the environment (`CompiledScene.environment`) looked
-    up along it as the ray methods do (`kernels.environment.sky_radiance`), or the background colour."""
+    up along it as the ray methods do (`kernels.environment.sky_radiance`: bilinear), or the background colour."""
     out = np.empty((height, width, 3))
     if environment is None:
         out[:] = np.asarray(background, np.float64)
@@ -165,7 +165,7 @@ def background_image(environment, background, camera, width: int, height: int) -
     from ..compile.camera import camera_arrays
     from ..kernels.layout import ENV_COS, ENV_SIN
     from ..kernels.queries import camera_rays_kernel
-    from ..mesh.directions import lat_long_pixel
+    from ..mesh.directions import lat_long_bilinear
 
     pixels, _, _, info = environment
     vecs, params = camera_arrays(camera)
@@ -174,6 +174,5 @@ def background_image(environment, background, camera, width: int, height: int) -
     camera_rays_kernel(vecs, params, np.int64(width), np.int64(height), fx.ravel(), fy.ravel(), origins, d)
     c, s = info[ENV_COS], info[ENV_SIN]
     turned = np.column_stack([c * d[:, 0] - s * d[:, 2], d[:, 1], s * d[:, 0] + c * d[:, 2]])  # by the rotation
-    row, col = lat_long_pixel(turned.reshape(height, width, 3), *pixels.shape[:2])
-    out[:] = pixels[row, col]
+    out[:] = lat_long_bilinear(pixels, turned.reshape(height, width, 3))
     return out

@@ -48,7 +48,7 @@ from ..kernels.bsdf import (
 from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit, occluded
 from ..kernels.emitters import emitter_pdf, sample_emitter, selection_pmf
-from ..kernels.environment import env_pdf, env_radiance
+from ..kernels.environment import env_bilinear, env_pdf, env_radiance
 from ..kernels.illumination import is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
 from ..kernels.layout import (
@@ -334,12 +334,16 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
 @njit_inline
 def _missed(em, d, background, prev_p, prev_n, prev_delta, prev_pdf, mode):
     """What a ray that leaves the scene along d finds: the environment's radiance there with its MIS weight against
-    the environment's light samples (1 after the camera, a mirror or glass), or the background colour (weight 1)."""
+    the environment's light samples, or the background colour (weight 1). After the camera, a mirror or glass
+    (weight 1: no light sample meets such a ray) the image is seen directly, filtered as the other methods show
+    it (`env_bilinear`)."""
     if em.env_info[ENV_PRESENT] == 0.0:
         return (background[0], background[1], background[2]), 1.0
+    if prev_delta:
+        return env_bilinear(em.env_pixels, em.env_info, d), 1.0
     le = env_radiance(em, d)
     e = np.int64(em.env_info[ENV_ENTRY])
-    if prev_delta or mode == MODE_BSDF or e < 0:
+    if mode == MODE_BSDF or e < 0:
         return le, 1.0
     pdf_light = selection_pmf(em, e, prev_p, prev_n) * env_pdf(em, d)
     if not pdf_light > 0.0:
