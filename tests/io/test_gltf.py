@@ -335,7 +335,8 @@ def test_metallic_roughness_table(tmp_path, metallic, rough):
     model_ = mat["principled"]
     np.testing.assert_allclose(model_.pop("base_color"), base)
     assert model_ == {"metallic": metallic, "roughness": rough, "ior": 1.5, "specular": 1.0,
-                      "specular_color": [1.0] * 3, "transmission": 0.0}
+                      "specular_color": [1.0] * 3, "transmission": 0.0, "clearcoat": 0.0,
+                      "clearcoat_roughness": 0.0}
     model_["base_color"] = list(base)
     mat = classic(mat)
     f0 = 0.04 * (1 - metallic) + base * metallic
@@ -372,6 +373,24 @@ def test_transmission_ior_and_emissive_strength(tmp_path):
     np.testing.assert_allclose(mat["kr"], [f0] * 3)  # roughness 0: all of the specular is a mirror
     assert mat["ior"] == 2.0 and mat["fresnel"] is True
     assert model.warnings == []
+    lumos.load_scene(scene_of(model))
+
+
+def test_specular_and_clearcoat_extensions(tmp_path):
+    mat, model = material_of(tmp_path, {
+        "pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.1, 0.1, 1], "metallicFactor": 0, "roughnessFactor": 0.5},
+        "extensions": {"KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0.5]},
+                       "KHR_materials_clearcoat": {"clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.1,
+                                                   "clearcoatNormalTexture": {"index": 0}}}},
+        used=["KHR_materials_specular", "KHR_materials_clearcoat"])
+    p = mat["principled"]
+    assert (p["specular"], p["specular_color"], p["clearcoat"], p["clearcoat_roughness"]) == (0.5, [1, 0.5, 0.5],
+                                                                                              0.8, 0.1)
+    assert len(model.warnings) == 1 and "clearcoatNormalTexture" in model.warnings[0]
+    c = classic(mat)  # the coat's 0.04·0.8 off everything below it, and a mirror of that much on top
+    np.testing.assert_allclose(c["kd"], np.array([0.6, 0.1, 0.1]) * (1 - 0.02 * np.array([1, 0.5, 0.5]))
+                               * (1 - 0.032), rtol=1e-9)
+    np.testing.assert_allclose(np.array(c["kr"]) - 0.032, 0.02 * np.array([1, 0.5, 0.5]) * 0.968 * 0.25, rtol=1e-9)
     lumos.load_scene(scene_of(model))
 
 
@@ -537,9 +556,9 @@ def test_extensions_required_is_an_error_and_used_a_warning(tmp_path):
     assert "unsupported extension KHR_draco_mesh_compression" in error_of(corrupt(tmp_path, required))
 
     def used(g):
-        g.json["extensionsUsed"] = ["KHR_materials_sheen", "KHR_materials_clearcoat"]
+        g.json["extensionsUsed"] = ["KHR_materials_sheen", "KHR_materials_volume"]
     model = import_gltf(corrupt(tmp_path, used))
-    assert len(model.warnings) == 1 and "KHR_materials_sheen, KHR_materials_clearcoat" in model.warnings[0]
+    assert len(model.warnings) == 1 and "KHR_materials_sheen, KHR_materials_volume" in model.warnings[0]
 
 
 def test_error_wrong_version(tmp_path):

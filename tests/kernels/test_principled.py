@@ -18,16 +18,18 @@ from lumos.kernels import layout as L
 from lumos.kernels.principled import principled_at
 
 UP = (0.0, 0.0, 1.0)
-CASES = [  # base colour, metallic, roughness, the dielectric's F0 (from ior and specular) and F90
-    ((0.8, 0.4, 0.2), 0.0, 0.5, 0.04, 1.0),  # a rough dielectric over its diffuse base
-    ((0.9, 0.6, 0.3), 1.0, 0.3, 0.04, 1.0),  # a tinted metal
-    ((0.5, 0.7, 0.9), 0.5, 0.8, 0.054, 0.6),  # half and half, ior 1.86, KHR_materials_specular 0.6
-    ((1.0, 1.0, 1.0), 0.2, 0.15, 0.04, 1.0),  # glossy
+CASES = [  # base colour, metallic, roughness, the dielectric's F0 (from ior and specular) and F90, clear coat c, αc
+    ((0.8, 0.4, 0.2), 0.0, 0.5, 0.04, 1.0, 0.0, 0.0),  # a rough dielectric over its diffuse base
+    ((0.9, 0.6, 0.3), 1.0, 0.3, 0.04, 1.0, 0.0, 0.0),  # a tinted metal
+    ((0.5, 0.7, 0.9), 0.5, 0.8, 0.054, 0.6, 0.0, 0.0),  # half and half, ior 1.86, KHR_materials_specular 0.6
+    ((1.0, 1.0, 1.0), 0.2, 0.15, 0.04, 1.0, 0.0, 0.0),  # glossy
+    ((0.7, 0.1, 0.1), 0.0, 0.6, 0.04, 1.0, 1.0, 0.1),  # car paint: a rough red base under a glossy clear coat
+    ((0.9, 0.8, 0.5), 1.0, 0.5, 0.04, 1.0, 0.5, 0.3),  # a coated rough metal
 ]
 LEVEL = significance_level(0.01, len(CASES) * 2)
 
 
-def row_of(base, metallic, rough, f0=0.04, f90=1.0, transmission=0.0):
+def row_of(base, metallic, rough, f0=0.04, f90=1.0, clearcoat=0.0, coat_alpha=0.0, transmission=0.0):
     """A MODEL_PRINCIPLED material row with those factors and no textures."""
     row = np.zeros(L.MAT_SIZE)
     row[L.MAT_MODEL] = L.MODEL_PRINCIPLED
@@ -38,6 +40,8 @@ def row_of(base, metallic, rough, f0=0.04, f90=1.0, transmission=0.0):
     row[L.MAT_TRANSMISSION] = transmission
     row[L.MAT_F0:L.MAT_F0 + 3] = f0
     row[L.MAT_F90] = f90
+    row[L.MAT_CLEARCOAT] = clearcoat
+    row[L.MAT_COAT_ALPHA] = max(coat_alpha, 1e-3)
     row[L.MAT_TEXTURE] = -1.0
     row[L.MAT_BUMP] = -1.0
     return row
@@ -89,28 +93,37 @@ def _sample(row, kd, p_d, p_s, wo, u):
     return dirs, weights
 
 
-def twin(base, metallic, rough, f0, f90, wo, wi):
-    """The glTF specification's BRDF (Appendix B, with KHR_materials_specular), written out in NumPy for
-    directions wi (m, 3) about the normal +z: f (m, 3). Smith G separable, as lumos's GGX lobes."""
-    base = np.asarray(base, np.float64)
-    wo = np.asarray(wo, np.float64)
-    a2 = max(rough**2, 1e-3) ** 2
-    h = wi + wo
-    h /= np.linalg.norm(h, axis=1, keepdims=True)
-    cos_o, cos_i, cos_h = wo[2], wi[:, 2], h[:, 2]
-    vh = np.clip(h @ wo, 0.0, 1.0)
-    d = a2 / (np.pi * (cos_h**2 * (a2 - 1.0) + 1.0) ** 2)
+def ggx(alpha, wo, wi, h):
+    """D·G1(wo)·G1(wi)/(4 cos θo cos θi) of an isotropic GGX lobe of width α about +z (Smith G separable, as
+    lumos's GGX lobes)."""
+    a2 = alpha**2
+    d = a2 / (np.pi * (h[:, 2] ** 2 * (a2 - 1.0) + 1.0) ** 2)
 
     def g1(c):
         return 2.0 * c / (c + np.sqrt(a2 + (1.0 - a2) * c * c))
 
-    spec = d * g1(cos_o) * g1(cos_i) / (4.0 * cos_o * cos_i)
+    return d * g1(wo[2]) * g1(wi[:, 2]) / (4.0 * wo[2] * wi[:, 2])
+
+
+def twin(base, metallic, rough, f0, f90, clearcoat, coat_alpha, wo, wi):
+    """The glTF specification's BRDF (Appendix B, with KHR_materials_specular and the fresnel_coat of
+    KHR_materials_clearcoat), written out in NumPy for directions wi (m, 3) about the normal +z: f (m, 3)."""
+    base = np.asarray(base, np.float64)
+    wo = np.asarray(wo, np.float64)
+    h = wi + wo
+    h /= np.linalg.norm(h, axis=1, keepdims=True)
+    cos_i = wi[:, 2]
+    vh = np.clip(h @ wo, 0.0, 1.0)
+    spec = ggx(max(rough**2, 1e-3), wo, wi, h)
     s = (1.0 - vh) ** 5
     f_dielectric = f0 + (f90 - f0) * s  # (a grey F0 here)
     f_metal = base[None, :] + (1.0 - base[None, :]) * s[:, None]
     fresnel = (1.0 - metallic) * f_dielectric[:, None] + metallic * f_metal
     diffuse = (1.0 - metallic) * (1.0 - f_dielectric[:, None]) * base[None, :] / np.pi
-    return np.where(cos_i[:, None] > 0.0, diffuse + fresnel * spec[:, None], 0.0)
+    f = diffuse + fresnel * spec[:, None]
+    coat = clearcoat * (0.04 + 0.96 * (1.0 - wo[2]) ** 5)  # fresnel_coat: Schlick at n·wo
+    f = (1.0 - coat) * f + coat * ggx(max(coat_alpha, 1e-3), wo, wi, h)[:, None]
+    return np.where(cos_i[:, None] > 0.0, f, 0.0)
 
 
 def hemisphere_grid(n=400):
@@ -128,20 +141,18 @@ WO = unit((0.6, 0.1, 0.79))
 
 @pytest.mark.parametrize("case", CASES)
 def test_brdf_is_the_gltf_specifications(case):
-    base, metallic, rough, f0, f90 = case
-    row, kd, kt, p_d, p_s = _hit(NO_TEXTURES, row_of(base, metallic, rough, f0, f90), WO)
+    row, kd, kt, p_d, p_s = _hit(NO_TEXTURES, row_of(*case), WO)
     rng = np.random.default_rng(3)
     dirs = rng.normal(size=(2000, 3))
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     f, pdf = _eval(row, kd, p_d, p_s, WO, dirs)
-    np.testing.assert_allclose(f, twin(base, metallic, rough, f0, f90, WO, dirs), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(f, twin(*case, WO, dirs), rtol=1e-9, atol=1e-12)
     assert (pdf[dirs[:, 2] <= 0] == 0).all() and (pdf[dirs[:, 2] > 0] > 0).all()
 
 
 @pytest.mark.parametrize("case", CASES)
 def test_sampler_follows_its_pdf(case):
-    base, metallic, rough, f0, f90 = case
-    row, kd, kt, p_d, p_s = _hit(NO_TEXTURES, row_of(base, metallic, rough, f0, f90), WO)
+    row, kd, kt, p_d, p_s = _hit(NO_TEXTURES, row_of(*case), WO)
     rng = np.random.default_rng(1)
     u0 = rng.random(300_000)
 
@@ -158,19 +169,18 @@ def test_sampler_follows_its_pdf(case):
 @pytest.mark.parametrize("case", CASES)
 def test_sample_weights_average_to_the_twins_albedo(case):
     """E[f·cos/pdf] of the sampler (the path tracer's throughput) = ∫ f·cos dω of the specification's BRDF."""
-    base, metallic, rough, f0, f90 = case
-    row, kd, kt, p_d, p_s = _hit(NO_TEXTURES, row_of(base, metallic, rough, f0, f90), WO)
+    row, kd, kt, p_d, p_s = _hit(NO_TEXTURES, row_of(*case), WO)
     u = np.random.default_rng(5).random((400_000, 3))
     _, weights = _sample(row, kd, p_d, p_s, WO, u)
     dirs, d_omega = hemisphere_grid()
-    albedo = (twin(base, metallic, rough, f0, f90, WO, dirs) * dirs[:, 2:3]).sum(axis=0) * d_omega
+    albedo = (twin(*case, WO, dirs) * dirs[:, 2:3]).sum(axis=0) * d_omega
     mean, err = weights.mean(axis=0), weights.std(axis=0) / math.sqrt(len(u))
     assert np.all(np.abs(mean - albedo) < 4 * err + 2e-3 * albedo), (mean, albedo, err)
 
 
 def furnace_albedo(metallic, rough, cos_o, dirs, d_omega):
     wo = (math.sqrt(1 - cos_o**2), 0.0, cos_o)
-    return (twin((1, 1, 1), metallic, rough, 0.04, 1.0, wo, dirs)[:, 0] * dirs[:, 2]).sum() * d_omega
+    return (twin((1, 1, 1), metallic, rough, 0.04, 1.0, 0.0, 0.0, wo, dirs)[:, 0] * dirs[:, 2]).sum() * d_omega
 
 
 def test_white_furnace():
@@ -198,14 +208,13 @@ def test_white_furnace():
 
 
 def test_reciprocity():
-    base, metallic, rough, f0, f90 = CASES[2]
     rng = np.random.default_rng(9)
     a = rng.normal(size=(200, 3))
     b = rng.normal(size=(200, 3))
     a[:, 2], b[:, 2] = np.abs(a[:, 2]), np.abs(b[:, 2])
     a /= np.linalg.norm(a, axis=1, keepdims=True)
     b /= np.linalg.norm(b, axis=1, keepdims=True)
-    mat = row_of(base, metallic, rough, f0, f90)
+    mat = row_of(*CASES[2])  # (a clear coat's fresnel_coat weighs by n·wo alone: not reciprocal, by its definition)
     for i in range(len(a)):
         wa, wb = tuple(a[i]), tuple(b[i])
         row, kd, _, p_d, p_s = _hit(NO_TEXTURES, mat, wa)

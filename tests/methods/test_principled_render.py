@@ -55,18 +55,14 @@ def test_textures_multiply_the_factors_per_hit(tmp_path):
     assert not np.allclose(path(textured), path({"principled": {"metallic": 1.0, "roughness": 0.6}}), rtol=0.05)
 
 
-def test_a_metal_reflects_its_base_colour_by_schlicks_curve():
-    """A nearly smooth metal sphere alone under an even white sky: each pixel is the surface's directional albedo
-    there, Schlick's F(cos θ) = b + (1 − b)(1 − cos θ)⁵ from F0 = b (the lobe at roughness 0.05 loses nothing
-    measurable), b at the centre, whiter towards the rim."""
-    b = np.array([1.0, 0.78, 0.34])
-    n = 33
+def sphere_under_white_sky(principled, n=33, spp=32):
+    """A unit sphere alone under an even white sky, seen from z = 5 (fov 30°): (the image, cos θ between the
+    view and the normal at each pixel centre's hit, where the pixel centre's ray meets the sphere)."""
     img = lumos.render({"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov": 30},
                         "environment": {"color": [1, 1, 1]},
-                        "materials": {"m": {"principled": {"base_color": b.tolist(), "metallic": 1.0,
-                                                           "roughness": 0.05}}},
+                        "materials": {"m": {"principled": principled}},
                         "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m"}]},
-                       method="path", width=n, height=n, spp=32, seed=1).array
+                       method="path", width=n, height=n, spp=spp, seed=1).array
     t = np.tan(np.radians(15.0))
     x, y = np.meshgrid((np.arange(n) + 0.5) / n * 2 - 1, 1 - (np.arange(n) + 0.5) / n * 2)
     d = np.stack([x * t, y * t, -np.ones_like(x)], axis=-1)
@@ -74,15 +70,33 @@ def test_a_metal_reflects_its_base_colour_by_schlicks_curve():
     o = np.array([0.0, 0.0, 5.0])
     bo = d @ o
     disc = bo**2 - (o @ o - 1.0)
-    hit = disc > 0
-    p = o + (-bo - np.sqrt(np.where(hit, disc, 0.0)))[..., None] * d
-    cos = np.einsum("ijk,ijk->ij", -d, p)
-    inner = hit & (cos > 0.5)  # (near the rim a pixel spans too wide a range of angles)
-    want = b + (1.0 - b) * (1.0 - cos[..., None]) ** 5
-    err = np.abs(img - want)[inner]
+    p = o + (-bo - np.sqrt(np.maximum(disc, 0.0)))[..., None] * d
+    return img, np.where(disc > 0, np.einsum("ijk,ijk->ij", -d, p), np.nan)
+
+
+def test_a_metal_reflects_its_base_colour_by_schlicks_curve():
+    """Each pixel of a nearly smooth metal sphere under an even white sky is the surface's directional albedo
+    there, Schlick's F(cos θ) = b + (1 − b)(1 − cos θ)⁵ from F0 = b (the lobe at roughness 0.05 loses nothing
+    measurable): b at the centre, whiter towards the rim."""
+    b = np.array([1.0, 0.78, 0.34])
+    img, cos = sphere_under_white_sky({"base_color": b.tolist(), "metallic": 1.0, "roughness": 0.05})
+    inner = cos > 0.5  # (near the rim a pixel spans too wide a range of angles)
+    err = np.abs(img - (b + (1.0 - b) * (1.0 - cos[..., None]) ** 5))[inner]
     assert err.mean() < 0.004 and err.max() < 0.05, (err.mean(), err.max())  # (a few noisy pixels at 32 spp)
-    ring = hit & (cos > 0.25) & (cos < 0.35)  # the rim does whiten (where Schlick's curve rises)
+    ring = (cos > 0.25) & (cos < 0.35)  # the rim does whiten (where Schlick's curve rises)
     assert img[ring][:, 2].mean() > b[2] + 0.1, img[ring][:, 2].mean()
+
+
+def test_a_clear_coat_over_black_reflects_its_fresnel_factor():
+    """A black base (no specular) under a smooth clear coat: what the sphere shows is the coat alone,
+    c·Fc(cos θ) = c·(0.04 + 0.96(1 − cos θ)⁵), 0.04·c head-on."""
+    c = 0.8
+    img, cos = sphere_under_white_sky({"base_color": 0.0, "metallic": 0.0, "specular": 0.0, "clearcoat": c,
+                                       "clearcoat_roughness": 0.05})
+    inner = cos > 0.5
+    err = np.abs(img - c * (0.04 + 0.96 * (1.0 - cos[..., None]) ** 5))[inner]
+    assert err.mean() < 0.002 and err.max() < 0.02, (err.mean(), err.max())
+    np.testing.assert_allclose(img[16, 16], 0.04 * c, atol=0.003)
 
 
 @pytest.mark.parametrize("method", ["raycast", "whitted", "raster"])

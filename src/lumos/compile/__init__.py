@@ -150,6 +150,8 @@ def _principled_columns(row: np.ndarray, principled) -> None:
     row[L.MAT_TRANSMISSION] = principled.transmission
     row[L.MAT_F0 : L.MAT_F0 + 3] = principled.f0
     row[L.MAT_F90] = principled.specular
+    row[L.MAT_CLEARCOAT] = principled.clearcoat
+    row[L.MAT_COAT_ALPHA] = max(principled.clearcoat_roughness**2, 1e-3)  # (kernels.principled.ALPHA_MIN)
 
 
 class _Shapes:

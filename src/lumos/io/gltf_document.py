@@ -26,7 +26,8 @@ ACCESSOR_TYPES = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3
 
 #: extensions this reader understands (others in extensionsRequired are an error, in extensionsUsed a warning)
 SUPPORTED_EXTENSIONS = ("KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_transmission",
-                        "KHR_materials_ior", "KHR_materials_specular", "KHR_texture_transform")
+                        "KHR_materials_ior", "KHR_materials_specular", "KHR_materials_clearcoat",
+                        "KHR_texture_transform")
 
 #: The GLB container (glTF 2.0 §4.4): its magic (b"glTF") and chunk types (b"JSON", b"BIN\0"), read by `_glb_chunks`
 #: and written by `glb_container`.

@@ -6,7 +6,8 @@
 
 The mapping (docs/formats.md#gltf-20 has the table): each glTF material becomes a lumos `principled` material
 (`scene.materials.Principled`: glTF's own metallic–roughness BRDF, which `path` reads exactly) with its factors
-(baseColorFactor, metallicFactor, roughnessFactor, KHR_materials_ior, _specular, _transmission), and textures:
+(baseColorFactor, metallicFactor, roughnessFactor, KHR_materials_ior, _specular, _transmission, _clearcoat), and
+textures:
 
     baseColorTexture          apply_to [base_color, and the classic ka, kd, ks, kr it tints], multiply
     metallicRoughnessTexture  apply_to [metallic_roughness] (raw: blue × metallic, green × roughness)
@@ -94,6 +95,13 @@ class Materials:
             "transmission": doc.number(doc.obj(ext, "KHR_materials_transmission", at_ext), "transmissionFactor",
                                        f"{at_ext}.KHR_materials_transmission", 0.0, 0.0, 1.0),
         }
+        coat = doc.obj(ext, "KHR_materials_clearcoat", at_ext)
+        at_coat = f"{at_ext}.KHR_materials_clearcoat"
+        model["clearcoat"] = doc.number(coat, "clearcoatFactor", at_coat, 0.0, 0.0, 1.0)
+        model["clearcoat_roughness"] = doc.number(coat, "clearcoatRoughnessFactor", at_coat, 0.0, 0.0, 1.0)
+        for key in ("clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"):
+            if key in coat:
+                doc.warn(f"{at_coat}.{key}: not read (lumos's clear coat takes the factors and the base's normal)")
         for key in ("specularTexture", "specularColorTexture"):
             if key in spec:
                 doc.warn(f"{at_spec}.{key}: not read (lumos's principled material takes the specular factors)")

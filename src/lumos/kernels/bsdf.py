@@ -55,7 +55,7 @@ from .microfacet import (
     sample_ggx,
     sample_ggx_dielectric,
 )
-from .principled import eval_principled
+from .principled import eval_principled, sample_principled
 from .sampling import turn
 from .vec import dot, madd, mul, orthonormal_basis
 
@@ -226,6 +226,8 @@ def sample_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, u_lobe, u1, u2):
         wi, ok = sample_ggx_dielectric(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], eta, n, wo, (u_lobe - p_d) / p_s, u1, u2)
         if not ok:
             return wi, (0.0, 0.0, 0.0), 0.0
+    elif model == MODEL_PRINCIPLED:  # (its base's or its clear coat's lobe, by (u_lobe − p_d)/p_s)
+        wi = sample_principled(mat, n, wo, (u_lobe - p_d) / p_s, u1, u2)
     elif model != MODEL_CLASSIC:
         wi = sample_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, u1, u2)
     else:

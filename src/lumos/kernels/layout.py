@@ -71,6 +71,10 @@ MAT_ROUGHNESS = 33  # perceptual roughness r (GGX α = r², written into MAT_ALP
 MAT_TRANSMISSION = 34  # t, the share of the dielectric's base that is smooth glass of index MAT_IOR
 MAT_F0 = 35  # the dielectric's reflectance head-on per channel (from ior, specular, specular_color)
 MAT_F90 = 38  # and at grazing incidence (KHR_materials_specular's factor)
+MAT_CLEARCOAT = 39  # KHR_materials_clearcoat: the coat's factor c (0: none)
+MAT_COAT_ALPHA = 40  # its GGX width (clearcoatRoughness²)
+MAT_COAT_WEIGHT = 41  # per hit: c·Fc(n·wo), the share of the light the coat takes (Schlick, F0 0.04)
+MAT_COAT_SHARE = 42  # per hit: the probability of sampling the coat's lobe rather than the base's glossy one
 
 MODEL_CLASSIC = 0  # kd, ks/shininess, kr, kt read as kernels.bsdf says
 MODEL_CONDUCTOR = 1  # a metal: GGX microfacets (a mirror when α = 0) with the Fresnel factor of η + ik

@@ -1,7 +1,8 @@
 """glTF 2.0's metallic–roughness material (MODEL_PRINCIPLED), read exactly by the path tracer.
 
     kd, kt, wd, ws = principled_at(tex, mat, row, u, v, p, cos_o)   # the material at a hit, into `row`
-    fd, fs, pdf = eval_principled(kd, mat, p_d, p_s, n, wo, wi)            # (kernels.bsdf.eval_smooth calls it)
+    fd, fs, pdf = eval_principled(kd, mat, p_d, p_s, n, wo, wi)      # (kernels.bsdf.eval_smooth calls it)
+    wi = sample_principled(mat, n, wo, u, u1, u2)                    # (and kernels.bsdf.sample_smooth this)
 
 The BRDF of the glTF specification's Appendix B, with KHR_materials_specular and _ior, for base colour b,
 metallic m and perceptual roughness r (GGX α = r², `kernels.microfacet`), h the half vector of wo and wi:
@@ -11,7 +12,10 @@ metallic m and perceptual roughness r (GGX α = r², `kernels.microfacet`), h th
     F(c)   = (1 − m)·F_d(c) + m·(b + (1 − b)·(1 − c)⁵)   the metal's Schlick Fresnel has F0 = b
 
 and `transmission` t hands that share of the dielectric's base on to smooth glass of index MAT_IOR (the path
-tracer's transmission lobe kt = (1 − m)·t·b, `methods.path_trace._transmit`). G is Smith's separable
+tracer's transmission lobe kt = (1 − m)·t·b, `methods.path_trace._transmit`). KHR_materials_clearcoat lays a
+clear coat of factor c and width α_c over all of it (the extension's fresnel_coat):
+
+    f_coated = (1 − c·Fc(n·wo))·f + c·Fc(n·wo)·D_c·G_c/(4·cos θo·cos θi),   Fc(x) = 0.04 + 0.96·(1 − x)⁵ G is Smith's separable
 masking–shadowing, as in lumos's other GGX lobes (the specification's sample code uses the height-correlated
 form, a few per cent brighter at grazing angles on rough surfaces).
 
@@ -19,10 +23,11 @@ b, m and r vary over the surface: the row holds their factors, and the material'
 replace) them per hit: APPLY_BASE rows the base colour, an APPLY_METAL_ROUGH row (raw texels) m by its blue and
 r by its green, as glTF's metallicRoughnessTexture. `principled_at` writes the hit's b, m and α into a per-thread
 copy of the row (`row`), which the BSDF functions then read like any material row, and returns the lobe
-weights: kd = (1 − m)(1 − t)·b for the diffuse (the Fresnel weight is applied in `eval_principled`, as is the
-glossy lobe's Fresnel factor F, which needs no weight), kt for the glass; and the weights (wd, ws) the lobe
-choice draws by:
-the diffuse and glossy albedos estimated at cos θo = n·wo by the Fresnel factors there.
+weights: kd = (1 − m)(1 − t)(1 − c·Fc)·b for the diffuse (the Fresnel weight is applied in `eval_principled`,
+as is the glossy lobe's Fresnel factor F, which needs no weight), kt for the glass; and the weights (wd, ws) the
+lobe choice draws by: the diffuse and glossy albedos estimated at cos θo = n·wo by the Fresnel factors there
+(the coat's c·Fc in the glossy one, and in the row the share MAT_COAT_SHARE of the glossy samples that are the
+coat's).
 """
 
 import numpy as np
@@ -31,6 +36,10 @@ from .jit import njit
 from .layout import (
     MAT_ALPHA,
     MAT_BASE,
+    MAT_CLEARCOAT,
+    MAT_COAT_ALPHA,
+    MAT_COAT_SHARE,
+    MAT_COAT_WEIGHT,
     MAT_F0,
     MAT_F90,
     MAT_METALLIC,
@@ -39,7 +48,7 @@ from .layout import (
     MAT_TEXTURE_COUNT,
     MAT_TRANSMISSION,
 )
-from .microfacet import eval_ggx
+from .microfacet import eval_ggx, sample_ggx
 from .texture import APPLY_BASE, APPLY_METAL_ROUGH, MODE_MULTIPLY, TEX_APPLY, TEX_MODE, texture_rgb
 from .vec import dot
 
@@ -79,13 +88,18 @@ def principled_at(tex, mat, row, u, v, p, cos_o):
     row[MAT_BASE], row[MAT_BASE + 1], row[MAT_BASE + 2] = b0, b1, b2
     row[MAT_METALLIC] = m
     row[MAT_ALPHA] = row[MAT_ALPHA + 1] = alpha
+    coat = mat[MAT_CLEARCOAT] * (0.04 + 0.96 * (1.0 - min(max(cos_o, 0.0), 1.0)) ** 5)
+    row[MAT_COAT_WEIGHT] = coat
     t = mat[MAT_TRANSMISSION]
-    d = 1.0 - m
+    d = (1.0 - m) * (1.0 - coat)
     kd = (d * (1.0 - t) * b0, d * (1.0 - t) * b1, d * (1.0 - t) * b2)
     kt = (d * t * b0, d * t * b1, d * t * b2)
     (f0, f1, f2), f_max = principled_fresnel(row, cos_o)
     k = 1.0 - f_max
-    return kd, kt, (kd[0] * k, kd[1] * k, kd[2] * k), (f0, f1, f2)
+    under = 1.0 - coat
+    ws = (f0 * under + coat, f1 * under + coat, f2 * under + coat)
+    row[MAT_COAT_SHARE] = 3.0 * coat / (ws[0] + ws[1] + ws[2]) if coat > 0.0 else 0.0
+    return kd, kt, (kd[0] * k, kd[1] * k, kd[2] * k), ws
 
 
 @njit
@@ -113,5 +127,22 @@ def eval_principled(kd, mat, p_d, p_s, n, wo, wi):
     g, pdf_g, o_h = eval_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, wi)
     f, f_max = principled_fresnel(mat, o_h)
     c = (1.0 - f_max) * _INV_PI
-    return ((kd[0] * c, kd[1] * c, kd[2] * c), (f[0] * g, f[1] * g, f[2] * g),
-            p_d * cos_i * _INV_PI + p_s * pdf_g)
+    fd = (kd[0] * c, kd[1] * c, kd[2] * c)
+    coat = mat[MAT_COAT_WEIGHT]
+    if not coat > 0.0:
+        return fd, (f[0] * g, f[1] * g, f[2] * g), p_d * cos_i * _INV_PI + p_s * pdf_g
+    g_c, pdf_c, _ = eval_ggx(mat[MAT_COAT_ALPHA], mat[MAT_COAT_ALPHA], n, wo, wi)
+    g *= 1.0 - coat
+    g_c *= coat
+    q = mat[MAT_COAT_SHARE]
+    return (fd, (f[0] * g + g_c, f[1] * g + g_c, f[2] * g + g_c),
+            p_d * cos_i * _INV_PI + p_s * ((1.0 - q) * pdf_g + q * pdf_c))
+
+
+@njit
+def sample_principled(mat, n, wo, u, u1, u2):
+    """A direction from the principled model's glossy lobes: the coat's visible GGX normals with probability
+    MAT_COAT_SHARE (u below it), else the base's."""
+    if u < mat[MAT_COAT_SHARE]:
+        return sample_ggx(mat[MAT_COAT_ALPHA], mat[MAT_COAT_ALPHA], n, wo, u1, u2)
+    return sample_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, u1, u2)

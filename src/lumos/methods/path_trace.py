@@ -264,8 +264,9 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         # first vertex's Sobol pair is in the sample's batch all the same; a later vertex's hash is saved)
         u_lobe = u_pick = 0.0
         lobes = (p_d > 0.0) + (p_s > 0.0) + (p_r > 0.0)
-        rough_glass = mat[MAT_MODEL] == MODEL_DIELECTRIC  # (u_lobe chooses its reflection or refraction too)
-        if p_t > 0.0 or lobes > 1 or em.emit_cdf.shape[0] > 1 or rough_glass:
+        # (u_lobe also chooses a rough dielectric's reflection or refraction, a clear coat's lobe or the base's)
+        one_more_choice = mat[MAT_MODEL] == MODEL_DIELECTRIC or mat[MAT_MODEL] == MODEL_PRINCIPLED
+        if p_t > 0.0 or lobes > 1 or em.emit_cdf.shape[0] > 1 or one_more_choice:
             u_lobe, u_pick = _draw2(sampler, points, col, key, pair, dim)
         # stage 4: next-event estimation (the smooth lobes only: a mirror or glass cannot meet a light sample)
         if p_d + p_s > 0.0:

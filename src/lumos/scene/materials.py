@@ -177,7 +177,8 @@ class Principled(StrictModel):
     `roughness` r (GGX α = r²); a mix by m of a metal (GGX, Schlick's Fresnel from F0 = b) and a dielectric (the
     same GGX lobe with F0 = ((ior − 1)/(ior + 1))²·specular_color·specular, F90 = specular, over a Lambertian
     base b weighted by 1 − max F). `transmission` t turns that share of the dielectric's base into smooth glass
-    of index `ior`. Textures reach it through `apply_to: [base_color]` (multiplies b) and
+    of index `ior`; `clearcoat` lays KHR_materials_clearcoat's clear coat (Schlick F0 0.04, GGX of width
+    clearcoat_roughness²) over it. Textures reach it through `apply_to: [base_color]` (multiplies b) and
     `[metallic_roughness]` (a glTF metallicRoughnessTexture: its blue multiplies m, its green r)."""
 
     base_color: ShareColor = (1.0, 1.0, 1.0)
@@ -187,6 +188,8 @@ class Principled(StrictModel):
     specular: Annotated[float, Field(ge=0.0, le=1.0)] = 1.0
     specular_color: Color = (1.0, 1.0, 1.0)
     transmission: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
+    clearcoat: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
+    clearcoat_roughness: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
 
     @property
     def f0(self) -> tuple[float, float, float]:
@@ -198,17 +201,21 @@ class Principled(StrictModel):
         """The classic coefficients the local methods read (docs/formats.md#gltf-20), with g = (1 − r)² the share
         of the specular reflection that is a sharp mirror and F0s = F0·(1 − m) + b·m its colour:
         kd = b·(1 − m)·(1 − F0)·(1 − t), kt = b·(1 − m)·(1 − F0)·t, ks = F0s·(1 − g), kr = F0s·g, ka = kd + F0s,
-        and the Phong exponent of the GGX width r² (`phong_exponent`), so kd + ks + kr + kt <= 1."""
+        and the Phong exponent of the GGX width r² (`phong_exponent`), so kd + ks + kr + kt <= 1; a clear coat
+        takes 0.04·c off all of them and adds it to kr (its roughness below 0.5) or ks."""
         import numpy as np
 
         b, m, t = np.asarray(self.base_color, dtype=float), self.metallic, self.transmission
         f0 = np.asarray(self.f0)
-        dielectric = (1.0 - m) * (1.0 - f0)
-        specular = f0 * (1.0 - m) + b * m
+        under = 1.0 - 0.04 * self.clearcoat  # a clear coat takes its head-on reflectance off what lies below
+        dielectric = (1.0 - m) * (1.0 - f0) * under
+        specular = (f0 * (1.0 - m) + b * m) * under
         g = (1.0 - self.roughness) ** 2
         kd = b * dielectric * (1.0 - t)
-        out = {"ka": kd + specular, "kd": kd, "ks": specular * (1.0 - g), "kr": specular * g,
-               "shininess": phong_exponent(self.roughness ** 2)}
+        coat = 0.04 * self.clearcoat  # and reflects it: a mirror when smooth (roughness below 0.5), else a highlight
+        smooth = self.clearcoat_roughness < 0.5
+        out = {"ka": kd + specular + coat, "kd": kd, "ks": specular * (1.0 - g) + (0.0 if smooth else coat),
+               "kr": specular * g + (coat if smooth else 0.0), "shininess": phong_exponent(self.roughness ** 2)}
         if t > 0.0:
             out.update(kt=b * dielectric * t, ior=self.ior, fresnel=True)
         return {k: tuple(float(x) for x in v) if isinstance(v, np.ndarray) else v for k, v in out.items()}
