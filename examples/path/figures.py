@@ -24,6 +24,7 @@ examples/raster/figures.py does). Every number in a caption is measured here and
   1024-spp render and Mitsuba's reference, with the RMSE of each against the reference. Skipped without pyoidn.
 - `helmet.png`: DamagedHelmet under the courtyard (helmet.yaml) beside three.js's render of the same file
   (helmet_three.png, from helmet_viewer.py), with the mean difference over the helmet's pixels.
+- `material_grid.png`: material_grid.yaml, the principled material's metallic × roughness grid.
 - `variance.png`: the spheres box and its `variance` AOV, shown as the standard error of each pixel (of the
   variance averaged over 3x3 pixels).
 
@@ -315,9 +316,16 @@ def helmet_figure():
     save(compose(panels, 2), "helmet.png")
 
 
+def grid_figure():
+    """material_grid.yaml as its file says: glTF's metallic (rows) × roughness (columns) under the courtyard."""
+    img = render(load("material_grid.yaml"), "material_grid.yaml", spp=spp(load("material_grid.yaml").render.spp))
+    measured("material_grid", f"{img.stats['spp']} spp render_s", f"{img.stats['render_s']:.1f}")
+    save(png8(img.array, img.exposure), "material_grid.png")
+
+
 FIGURES = {"cornell": cornell_figure, "spheres": spheres_figure, "showcase": showcase_figure,
            "bunny": bunny_figure, "veach": veach_figure, "noise": noise_figure, "denoise": denoise_figure,
-           "helmet": helmet_figure}
+           "helmet": helmet_figure, "grid": grid_figure}
 
 
 def main() -> None:
