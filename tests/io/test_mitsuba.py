@@ -22,6 +22,7 @@ from lumos.io import mitsuba_data
 from lumos.io.mitsuba import read_mitsuba
 from lumos.io.mitsuba_values import look_at, rotation
 from lumos.io.mitsuba_xml import parse_scene
+from lumos.scene.materials import Material
 
 MITSUBA = DATA / "mitsuba"
 
@@ -425,7 +426,8 @@ def test_textures(tmp_path):
 
 def test_other_bsdfs(tmp_path):
     """thindielectric: a mirror of 2R/(1 + R) and the rest passed straight on; blendbsdf mixes coefficients;
-    principled reads as glTF's metallic-roughness (a metal: no kd, its colour in ks and kr)."""
+    principled reads as lumos's principled material, glTF's metallic-roughness BRDF (whose classic reading of a
+    metal has no kd and its colour in ks and kr)."""
     with pytest.warns(LumosWarning):
         data = read(tmp_path, """
       <shape type="sphere"><bsdf type="thindielectric"/></shape>
@@ -437,7 +439,12 @@ def test_other_bsdfs(tmp_path):
     r = ((1.5046 / 1.000277 - 1) / (1.5046 / 1.000277 + 1)) ** 2
     assert thin == {"kr": pytest.approx(2 * r / (1 + r)), "kt": pytest.approx(1 - 2 * r / (1 + r)), "ior": 1.0}
     assert blend == {"kd": pytest.approx([0.6] * 3), "kr": pytest.approx([0.25] * 3)}
-    assert metal["kd"] == [0, 0, 0] and metal["kr"] == pytest.approx([0.9 * 0.25, 0.6 * 0.25, 0.2 * 0.25])
+    principled = dict(metal["principled"])
+    assert principled.pop("base_color") == pytest.approx([0.9, 0.6, 0.2])
+    assert principled == pytest.approx({"metallic": 1.0, "roughness": 0.5, "ior": 1.5, "transmission": 0.0,
+                                        "clearcoat": 0.0, "clearcoat_roughness": math.sqrt(0.1)})
+    classic = Material.model_validate(metal).classic()
+    assert classic["kd"] == (0, 0, 0) and classic["kr"] == pytest.approx([0.9 * 0.25, 0.6 * 0.25, 0.2 * 0.25])
 
 
 def test_an_environment_map_is_lumos_image_environment_mirrored_and_turned(tmp_path):

@@ -20,8 +20,7 @@ from typing import Optional
 import numpy as np
 
 from ..errors import LumosError, LumosWarning
-from ..scene.materials import Dielectric, phong_exponent  # (phong_exponent: the Phong lobe as wide as a GGX one)
-from .gltf_materials import shininess
+from ..scene.materials import Dielectric, Principled, phong_exponent  # (phong_exponent: a Phong lobe as wide as GGX)
 from .mitsuba_data import CONDUCTORS, IORS, conductor_reflectance, named_ior, spectrum_rgb, uniform_spectrum_rgb
 from .mitsuba_xml import Node, Spectrum, Value, Where, find_file
 
@@ -391,25 +390,31 @@ def _roughplastic(node: Node, ctx: Context) -> dict:
 
 
 def _principled(node: Node, ctx: Context) -> dict:
-    """Disney's principled BSDF as glTF's metallic–roughness model is read (docs/formats.md): base b,
-    metallic m, roughness r, F0 = 0.08·specular (or from eta), g = (1 − r)² the mirror share."""
-    base, tex = color(node, "base_color", 0.5, ctx, "kd")
-    m = scalar(node, "metallic", 0.0, ctx)
-    r = scalar(node, "roughness", 0.5, ctx)
-    t = scalar(node, "spec_trans", 0.0, ctx)
+    """Disney's principled BSDF (Mitsuba 3's `principled`) as lumos's `principled` material, glTF's
+    metallic–roughness BRDF, which shares its base colour, metallic and roughness (GGX α = r² in both), its
+    specular (F0 = 0.08·specular, or from eta: read as the index whose F0 that is), spec_trans (smooth glass of
+    that index) and a clear coat (Disney's GTR1 width mix(0.1, 0.001, clearcoat_gloss) read as a GGX coat of that
+    width). Sheen, anisotropy, spec_tint and flatness are not read (one warning naming those given)."""
+    base, tex = color(node, "base_color", 0.5, ctx, "base_color")
     if "eta" in node.props:
         eta = node.float("eta")
     else:
         eta = 2.0 / (1.0 - math.sqrt(0.08 * scalar(node, "specular", 0.5, ctx))) - 1.0
-    f0, g = fresnel0(eta), (1.0 - r) ** 2
-    b = np.asarray(base)
-    f0s = f0 * (1.0 - m) + b * m
-    ctx.warn(("bsdf", node.type), node.where, f"principled: read as glTF's metallic-roughness model is (a Phong "
-             f"lobe of shininess {shininess(r):.3g}); sheen, clearcoat and anisotropy are not read")
-    material = {"kd": (b * (1 - m) * (1 - f0) * (1 - t)).tolist(), "ks": (f0s * (1 - g)).tolist(),
-                "kr": np.minimum(f0s * g, 1.0).tolist(), "shininess": shininess(r)}
-    if t > 0:
-        material.update(kt=np.minimum(b * (1 - m) * (1 - f0) * t, 1.0).tolist(), ior=eta, fresnel=True)
+    gloss = scalar(node, "clearcoat_gloss", 0.0, ctx)
+    model = {"base_color": list(base), "metallic": scalar(node, "metallic", 0.0, ctx),
+             "roughness": scalar(node, "roughness", 0.5, ctx), "ior": max(eta, 1.0),
+             "transmission": scalar(node, "spec_trans", 0.0, ctx),
+             "clearcoat": scalar(node, "clearcoat", 0.0, ctx),
+             "clearcoat_roughness": math.sqrt(0.1 + (0.001 - 0.1) * gloss)}
+    unread = [k for k in ("sheen", "sheen_tint", "anisotropic", "spec_tint", "flatness") if k in node.props]
+    if unread:
+        ctx.warn(("principled", tuple(unread)), node.where, f"principled: {', '.join(unread)} not read (lumos's "
+                 "principled material is glTF's metallic-roughness BRDF)")
+    material = {"principled": model}
+    if tex is not None:  # the base colour's map, and the classic coefficients that carry it (the local methods)
+        classic = Principled(**model).classic()
+        targets = [k for k in ("ka", "kd", "ks", "kr") if np.any(np.asarray(classic[k]) > 0)]
+        tex = {**tex, "apply_to": ["base_color", *targets]}
     return with_texture(material, tex, "multiply")
 
 
