@@ -550,6 +550,16 @@ def test_error_glb_magic_and_version(tmp_path):
     assert "truncated" in error_of(path)
 
 
+def test_children_that_are_not_an_array_are_one_line_errors_without_scenes_too(tmp_path):
+    """(Found by the hypothesis test below: a file with no scenes, whose roots lumos finds itself, read a node's
+    `children: 0` as a list.)"""
+    def change(g):
+        g.json.pop("scenes", None)
+        g.json.pop("scene", None)
+        g.json["nodes"][0]["children"] = 0
+    assert "nodes[0].children: must be a JSON array" in error_of(corrupt(tmp_path, change))
+
+
 def test_extensions_required_is_an_error_and_used_a_warning(tmp_path):
     def required(g):
         g.json["extensionsRequired"] = ["KHR_draco_mesh_compression"]

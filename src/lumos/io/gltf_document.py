@@ -167,8 +167,9 @@ class Document:
             roots = [self.index({"n": r}, "n", f"scenes[{s}].nodes[{k}]", "nodes")
                      for k, r in enumerate(self.list(scene, "nodes", f"scenes[{s}]"))]
         else:  # no scenes: every node that is nobody's child
-            children = {c for node in self.list(self.json, "nodes", "") if isinstance(node, dict)
-                        for c in node.get("children", []) if isinstance(c, int)}
+            nodes = self.list(self.json, "nodes", "")
+            children = {c for k, node in enumerate(nodes) if isinstance(node, dict)
+                        for c in self.list(node, "children", f"nodes[{k}]") if isinstance(c, int)}
             roots = [i for i in range(len(self.list(self.json, "nodes", ""))) if i not in children]
         seen: set[int] = set()
         stack = [(r, np.eye(4)) for r in reversed(roots)]
