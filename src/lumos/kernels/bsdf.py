@@ -146,7 +146,7 @@ def eval_dielectric(kd, ks, mat, p_d, p_s, eta, n, wo, wi):
     return fd, fs, pdf
 
 
-@njit_inline
+@njit
 def eval_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, wi):
     """The smooth part of the BSDF for the pair (wo, wi): (f_diffuse rgb, f_glossy rgb, pdf of wi).
 

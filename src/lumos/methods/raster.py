@@ -176,29 +176,31 @@ def _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
             mat = lit.materials[materials_of[i]]
             frame = frames[i if i < frames.shape[0] else 0]  # one row of zeros when the scene has no textures
             ka, kd, ks, _, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frame, _NO_FOOTPRINT)
-            if not gouraud:
-                n_f = _facing(n, V)
-                n_s = _facing(n_b, n_f)
-                a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_f, V, ka, kd, ks, mat[MAT_SHININESS],
-                                                   seed, i, 0, shadows, stack, stack_t, 0.0, out, -1)
-                for k in range(3):
-                    out[i, k] = a[k]
-                    out[i, 3 + k] = d[k]
-                    out[i, 6 + k] = sp[k]
-                    out[i, 9 + k] = kd[k]
+            n_f = _facing(n, V)
+            # one call of the (inlined) illumination model for both readings: flat lights the side the viewer
+            # sees with the material's coefficients, Gouraud each side in turn with unit ones
+            for side in range(2 if gouraud else 1):
+                if gouraud:
+                    sgn = 1.0 if side == 0 else -1.0
+                    n_s = (sgn * n_b[0], sgn * n_b[1], sgn * n_b[2])
+                    n_g = (sgn * n[0], sgn * n[1], sgn * n[2])
+                    ca, cd, cs = zero, one, one
+                else:
+                    n_s, n_g = _facing(n_b, n_f), n_f
+                    ca, cd, cs = ka, kd, ks
+                a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ca, cd, cs, mat[MAT_SHININESS],
+                                                   seed, i, side, shadows, stack, stack_t, 0.0, out, -1)
                 count += extra
-                continue
-            for side in range(2):
-                sgn = 1.0 if side == 0 else -1.0
-                n_s = (sgn * n_b[0], sgn * n_b[1], sgn * n_b[2])
-                n_g = (sgn * n[0], sgn * n[1], sgn * n[2])
-                _, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, zero, one, one,
-                                                   mat[MAT_SHININESS], seed, i, side, shadows, stack, stack_t, 0.0,
-                                                   out, -1)
-                for k in range(3):
-                    out[i, 6 * side + k] = d[k]
-                    out[i, 6 * side + 3 + k] = sp[k]
-                count += extra
+                if gouraud:
+                    for k in range(3):
+                        out[i, 6 * side + k] = d[k]
+                        out[i, 6 * side + 3 + k] = sp[k]
+                else:
+                    for k in range(3):
+                        out[i, k] = a[k]
+                        out[i, 3 + k] = d[k]
+                        out[i, 6 + k] = sp[k]
+                        out[i, 9 + k] = kd[k]
         rays[c] = count
 
 
@@ -242,9 +244,16 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
             kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
             ke = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
             textured = uv_at >= 0 and (mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0)
+            ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
+            ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
+            u = v = 0.0
             fp = _NO_FOOTPRINT
-            if textured and mipmap:
-                fp = _footprint(cam_vecs, ortho, pixel_size, p, fn, frames[prim])
+            if textured:  # (one lookup, inlined once, whatever the shading: the pixel's coefficients and emission)
+                if mipmap:
+                    fp = _footprint(cam_vecs, ortho, pixel_size, p, fn, frames[prim])
+                u = np.float64(gbuf[y, x, uv_at])
+                v = np.float64(gbuf[y, x, uv_at + 1])
+                ka, kd, ks, _, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
             if shading == FLAT:
                 n_sh = _facing(fn, V)
                 a = (prim_terms[prim, 0], prim_terms[prim, 1], prim_terms[prim, 2])
@@ -256,17 +265,10 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
                                 np.float64(gbuf[y, x, G_NORMAL + 2])), fn)  # unit, on the face normal's side
                 if n_in[0] == 0.0 and n_in[1] == 0.0 and n_in[2] == 0.0:
                     n_in = fn
-                ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
-                ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
-                if textured:
-                    u = np.float64(gbuf[y, x, uv_at])
-                    v = np.float64(gbuf[y, x, uv_at + 1])
+                if textured and shading == PHONG and mat[MAT_BUMP] >= 0.0:  # (Gouraud's were at the vertices)
                     frame = frames[prim]
-                    if shading == PHONG:
-                        ka, kd, ks, ke, n_in = _surface_at(tex, mat, p, n_in, u, v, frame, fp)
-                    else:  # Gouraud: the texture per pixel; its bumps were applied at the vertices
-                        ka, kd, ks, _, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2],
-                                                                     fp[3])
+                    n_in = bump_normal_filtered(tex, mat, u, v, p, n_in, (frame[0], frame[1], frame[2]),
+                                                (frame[3], frame[4], frame[5]), fp[0], fp[1], fp[2], fp[3])
                 n_sh = shading_side(n_in, fn, V)
                 if shading == GOURAUD:
                     # the light on the side the viewer sees: the vertex normals' own side or the other one
@@ -286,10 +288,8 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
                                                        stack, stack_t, 0.0, light_log,
                                                        0 if x == explain[0] and y == explain[1] else -1)
                     rays += extra
-            # emitted light: one-sided emitters (rect and disk lights, one-sided objects) on their front only
-            if textured and shading == FLAT:  # the emission per pixel (the light at the polygon's centroid)
-                ke = material_coeffs_filtered(tex, mat, np.float64(gbuf[y, x, uv_at]),
-                                              np.float64(gbuf[y, x, uv_at + 1]), p, fp[0], fp[1], fp[2], fp[3])[4]
+            # emitted light (flat shading too takes it per pixel): one-sided emitters (rect and disk lights,
+            # one-sided objects) on their front only
             e = (0.0, 0.0, 0.0)
             if mat[MAT_ONE_SIDED] == 0.0 or fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] >= 0.0:
                 e = ke
