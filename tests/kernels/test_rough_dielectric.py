@@ -16,16 +16,19 @@ from chi2 import chi2_directions, frame_z, significance_level
 from lumos.kernels import bsdf
 from lumos.kernels import layout as L
 
-N_TESTS = 5
+N_TESTS = 6
 LEVEL = significance_level(0.01, N_TESTS)
 UP = (0.0, 0.0, 1.0)
 WHITE = (1.0, 1.0, 1.0)
 BLACK = (0.0, 0.0, 0.0)
+NONE = (0.0, 0.0, 0.0)  # no tangent: the frame `vec.orthonormal_basis` builds
 
 
-def glass(au, av=None, eta=1.5):
-    """A material row of a rough dielectric of relative index `eta` (inside over outside), white tints."""
+def glass(au, av=None, eta=1.5, tangent=(0.0, 0.0, 0.0)):
+    """A material row of a rough dielectric of relative index `eta` (inside over outside), white tints, its αu
+    along `tangent` (as the path tracer writes the hit's ∂p/∂u there)."""
     row = np.zeros(L.MAT_SIZE)
+    row[L.MAT_TANGENT:L.MAT_TANGENT + 3] = tangent
     row[L.MAT_MODEL] = L.MODEL_DIELECTRIC
     row[L.MAT_ALPHA:L.MAT_ALPHA + 2] = au, au if av is None else av
     row[L.MAT_ETA] = eta
@@ -84,16 +87,17 @@ def _smooth_batch(wo, n, eta, u):
 # ----------------------------------------------------------------------------------------------------- χ²
 
 
-@pytest.mark.parametrize("au, av, eta, wo", [
-    (0.1, None, 1.5, unit((0.5, 0.0, 0.866))),        # outside, 30°: narrow lobes around mirror and Snell
-    (0.5, None, 1.5, unit((0.94, 0.0, 0.34))),        # outside, 70°, wide
-    (0.3, None, 1 / 1.5, unit((0.6, 0.2, 0.77))),     # from inside (η inverted), 40°: some total internal reflection
-    (0.1, 0.4, 1.33, unit((-0.3, 0.5, 0.8))),         # anisotropic
+@pytest.mark.parametrize("au, av, eta, wo, tangent", [
+    (0.1, None, 1.5, unit((0.5, 0.0, 0.866)), NONE),  # outside, 30°: narrow lobes around mirror and Snell
+    (0.5, None, 1.5, unit((0.94, 0.0, 0.34)), NONE),  # outside, 70°, wide
+    (0.3, None, 1 / 1.5, unit((0.6, 0.2, 0.77)), NONE),  # from inside (η inverted), 40°: total internal reflection
+    (0.1, 0.4, 1.33, unit((-0.3, 0.5, 0.8)), NONE),  # anisotropic
+    (0.1, 0.4, 1.33, unit((-0.3, 0.5, 0.8)), (0.6, 0.7, 0.2)),  # anisotropic, along a surface's tangent
 ])
-def test_rough_dielectric_follows_its_pdf(au, av, eta, wo):
+def test_rough_dielectric_follows_its_pdf(au, av, eta, wo, tangent):
     """Directions over the whole sphere (reflection above, refraction below) follow `eval_smooth`'s pdf; the
     samples a choice sends to the wrong side are dropped and counted outside, as the pdf's deficit."""
-    row = glass(au, av)
+    row = glass(au, av, tangent=tangent)
     rng = np.random.default_rng(1)
     u0 = rng.random(300_000)
 

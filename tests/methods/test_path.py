@@ -474,6 +474,26 @@ def _agrees_with_mitsuba(material, bsdf, rtol):
     np.testing.assert_allclose(ours.mean(axis=(0, 1)), theirs.mean(axis=(0, 1)), rtol=rtol)
 
 
+def test_anisotropic_roughness_follows_the_surfaces_u_direction():
+    """A brushed metal plate (αu 0.05 along its edge_u, αv 0.4) seen from above its lamp: the highlight is narrow
+    along u and long along v; turning the plate's uv a quarter (edge_u and edge_v swapped) turns the highlight with
+    it, the same highlight to the noise (its spreads swap)."""
+    def spreads(edge_u, edge_v):
+        scene = {"camera": {"position": [0, 4, 0.01], "look_at": [0, 0, 0], "fov": 50, "up": [0, 0, -1]},
+                 "lights": [{"type": "point", "position": [0, 3, 0], "intensity": 10}],
+                 "objects": [{"type": "rect", "corner": [-2, 0, 2], "edge_u": edge_u, "edge_v": edge_v,
+                              "material": {"conductor": {"alpha": [0.05, 0.4]}}}]}
+        img = path(scene, width=64, height=64, spp=32, seed=1).array.mean(axis=2)
+        w = img / img.sum()
+        y, x = np.mgrid[0:64, 0:64]
+        mx, my = (w * x).sum(), (w * y).sum()
+        return np.sqrt((w * (x - mx) ** 2).sum()), np.sqrt((w * (y - my) ** 2).sum())
+
+    sx, sy = spreads([4, 0, 0], [0, 0, -4])  # u along x (the image's x), v along −z (the image's y)
+    assert sy > 3 * sx, (sx, sy)
+    np.testing.assert_allclose(spreads([0, 0, -4], [4, 0, 0]), (sy, sx), rtol=0.05)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("alpha", [0.0, 0.05, 0.3, 0.7])
 def test_metals_match_mitsuba(alpha):

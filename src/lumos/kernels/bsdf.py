@@ -39,6 +39,7 @@ from .layout import (
     MAT_K,
     MAT_MODEL,
     MAT_SHININESS,
+    MAT_TANGENT,
     MAT_TINT,
     MAT_TINT_T,
     MODEL_CLASSIC,
@@ -106,6 +107,15 @@ def surface_fresnel(mat, cos_o):
 
 
 @njit_inline
+def tangent_of(mat):
+    """The direction a (hit's) row's GGX width αu lies along (MAT_TANGENT; (0, 0, 0): none given, and always for
+    a plastic, whose coat is isotropic and whose row holds its coat's table there)."""
+    if mat[MAT_MODEL] == MODEL_PLASTIC:
+        return 0.0, 0.0, 0.0
+    return mat[MAT_TANGENT], mat[MAT_TANGENT + 1], mat[MAT_TANGENT + 2]
+
+
+@njit_inline
 def coat_transmittance(mat, cos_t):
     """A plastic coat's t(cos θ) = 1 − its directional reflectance, from the row's table (linear in cos θ)."""
     x = min(max(cos_t, 0.0), 1.0) * (MAT_COAT_SIZE - 1)
@@ -134,7 +144,7 @@ def eval_dielectric(kd, ks, mat, p_d, p_s, eta, n, wo, wi):
     """`eval_smooth` for a rough dielectric: its GGX reflection and refraction (`microfacet.eval_ggx_dielectric`)
     times ks and the reflected or transmitted tint, on either side of the surface; kd/π above it. (Called, not
     inlined: the lobes of the other models stay small where they are inlined.)"""
-    g, pdf_g, through = eval_ggx_dielectric(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], eta, n, wo, wi)
+    g, pdf_g, through = eval_ggx_dielectric(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], eta, n, tangent_of(mat), wo, wi)
     tint = MAT_TINT_T if through else MAT_TINT
     fs = (ks[0] * mat[tint] * g, ks[1] * mat[tint + 1] * g, ks[2] * mat[tint + 2] * g)
     pdf = p_s * pdf_g
@@ -171,7 +181,7 @@ def eval_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, wi):
     fd = (kd[0] * c, kd[1] * c, kd[2] * c)
     fs = (0.0, 0.0, 0.0)
     if p_s > 0.0 and model != MODEL_CLASSIC:
-        g, pdf_g, o_h = eval_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, wi)
+        g, pdf_g, o_h = eval_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, tangent_of(mat), wo, wi)
         f = surface_fresnel(mat, o_h)
         fs = (ks[0] * g * f[0], ks[1] * g * f[1], ks[2] * g * f[2])
         pdf += p_s * pdf_g
@@ -223,13 +233,14 @@ def sample_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, u_lobe, u1, u2):
     if u_lobe < p_d:
         wi = sample_cosine(n, u1, u2)
     elif model == MODEL_DIELECTRIC:
-        wi, ok = sample_ggx_dielectric(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], eta, n, wo, (u_lobe - p_d) / p_s, u1, u2)
+        wi, ok = sample_ggx_dielectric(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], eta, n, tangent_of(mat), wo,
+                                       (u_lobe - p_d) / p_s, u1, u2)
         if not ok:
             return wi, (0.0, 0.0, 0.0), 0.0
     elif model == MODEL_PRINCIPLED:  # (its base's or its clear coat's lobe, by (u_lobe − p_d)/p_s)
         wi = sample_principled(mat, n, wo, (u_lobe - p_d) / p_s, u1, u2)
     elif model != MODEL_CLASSIC:
-        wi = sample_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, u1, u2)
+        wi = sample_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, tangent_of(mat), wo, u1, u2)
     else:
         wi = sample_phong(mirror(wo, n), mat[MAT_SHININESS], u1, u2)
     fd, fs, pdf = eval_smooth(kd, ks, mat, p_d, p_s, eta, n, wo, wi)

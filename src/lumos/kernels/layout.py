@@ -75,6 +75,9 @@ MAT_CLEARCOAT = 39  # KHR_materials_clearcoat: the coat's factor c (0: none)
 MAT_COAT_ALPHA = 40  # its GGX width (clearcoatRoughness²)
 MAT_COAT_WEIGHT = 41  # per hit: c·Fc(n·wo), the share of the light the coat takes (Schlick, F0 0.04)
 MAT_COAT_SHARE = 42  # per hit: the probability of sampling the coat's lobe rather than the base's glossy one
+# conductor, dielectric (columns the plastic's coat table holds in a plastic's row): per hit, the surface's ∂p/∂u,
+# the direction αu lies along (`microfacet.tangent_frame`); (0, 0, 0) in the material's own row
+MAT_TANGENT = 60
 
 MODEL_CLASSIC = 0  # kd, ks/shininess, kr, kt read as kernels.bsdf says
 MODEL_CONDUCTOR = 1  # a metal: GGX microfacets (a mirror when α = 0) with the Fresnel factor of η + ik

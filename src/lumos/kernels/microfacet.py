@@ -11,7 +11,8 @@ rough dielectric's two lobes (`eval_ggx_dielectric`, after Walter et al. 2007).
 Shadowing is Smith's separable form G1·G1, as in Mitsuba 3 (pbrt-v4 uses the height-correlated one; they differ
 by at most a few per cent at α near 1). The lobe loses the energy of light that would scatter more than once
 between microfacets: the white furnace (F = 1) keeps 100% at α → 0 and less as α grows (tests/kernels).
-The tangent frame is `vec.orthonormal_basis(n)`: anisotropic widths (αu ≠ αv) follow it.
+The tangent frame (`tangent_frame`): αu lies along the given tangent (the surface's ∂p/∂u, made perpendicular to
+n: Mitsuba's shading frame), or, where none is given (0, 0, 0), along `vec.orthonormal_basis(n)`'s first axis.
 """
 
 import math
@@ -113,11 +114,26 @@ def local(v, t, b, n):
 
 
 @njit_inline
-def eval_ggx(au, av, n, wo, wi):
-    """The GGX lobe for the pair (wo, wi) about the shading normal n, without its Fresnel factor:
+def tangent_frame(n, tangent):
+    """(t, b): unit axes perpendicular to unit n, t along `tangent` made perpendicular to n (Gram–Schmidt), b =
+    n × t; `vec.orthonormal_basis(n)` where the tangent is (0, 0, 0) or along n."""
+    k = dot(tangent, n)
+    tx, ty, tz = tangent[0] - k * n[0], tangent[1] - k * n[1], tangent[2] - k * n[2]
+    length = math.sqrt(tx * tx + ty * ty + tz * tz)
+    if not length > 1e-12:
+        return orthonormal_basis(n)
+    inv = 1.0 / length
+    t = (tx * inv, ty * inv, tz * inv)
+    return t, (n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2], n[0] * t[1] - n[1] * t[0])
+
+
+@njit_inline
+def eval_ggx(au, av, n, tangent, wo, wi):
+    """The GGX lobe for the pair (wo, wi) about the shading normal n (αu along `tangent`: `tangent_frame`),
+    without its Fresnel factor:
     (D·G1(wo)·G1(wi)/(4·cos θo·cos θi), the pdf of wi under `sample_ggx`, wo·h) — the caller multiplies by F(wo·h)
     (a conductor's or a dielectric coat's)."""
-    t, b = orthonormal_basis(n)
+    t, b = tangent_frame(n, tangent)
     ox, oy, oz = local(wo, t, b, n)
     ix, iy, iz = local(wi, t, b, n)
     if oz <= 0.0 or iz <= 0.0:
@@ -133,9 +149,9 @@ def eval_ggx(au, av, n, wo, wi):
 
 
 @njit_inline
-def sample_ggx(au, av, n, wo, u1, u2):
+def sample_ggx(au, av, n, tangent, wo, u1, u2):
     """A direction reflected about a microfacet normal visible from wo; its pdf is `eval_ggx`'s."""
-    t, b = orthonormal_basis(n)
+    t, b = tangent_frame(n, tangent)
     ox, oy, oz = local(wo, t, b, n)
     hx, hy, hz = sample_visible_normal(ox, oy, max(oz, 1e-9), au, av, u1, u2)
     k = 2.0 * (ox * hx + oy * hy + oz * hz)
@@ -149,7 +165,7 @@ def _to_world(x, y, z, t, b, n):
 
 
 @njit
-def eval_ggx_dielectric(au, av, eta, n, wo, wi):
+def eval_ggx_dielectric(au, av, eta, n, tangent, wo, wi):
     """The rough dielectric's lobes for the pair (wo, wi) about the shading normal n (wo's side), after Walter et
     al. 2007 as Mitsuba 3's `roughdielectric` reads them in radiance mode; eta = n_t/n_i, the index on the far
     side over the index on wo's side. Returns (f without tint, the pdf of wi under `sample_ggx_dielectric`,
@@ -162,7 +178,7 @@ def eval_ggx_dielectric(au, av, eta, n, wo, wi):
     F = F(wo·h) the dielectric Fresnel factor, G = G1(wo)·G1(wi) (Smith, separable), h turned to n's side. The
     refracted f is Walter's eq. 21 with η_o² (the index on the viewer's side) over the squared sum: radiance
     compressed by (n_i/n_t)² (Mitsuba's 1/η² factor in radiance mode), so f(wo, wi)/n_o² = f(wi, wo)/n_i²."""
-    t, b = orthonormal_basis(n)
+    t, b = tangent_frame(n, tangent)
     ox, oy, oz = local(wo, t, b, n)
     ix, iy, iz = local(wi, t, b, n)
     if oz <= 0.0 or iz == 0.0:
@@ -192,12 +208,12 @@ def eval_ggx_dielectric(au, av, eta, n, wo, wi):
 
 
 @njit
-def sample_ggx_dielectric(au, av, eta, n, wo, u, u1, u2):
+def sample_ggx_dielectric(au, av, eta, n, tangent, wo, u, u1, u2):
     """A direction from the rough dielectric: a microfacet normal h visible from wo (u1, u2), then reflection
     about h with probability F(wo·h) (u < F), else refraction through it (eta = n_t/n_i). Returns (wi, ok):
     ok is False where the choice leaves its own side of the surface (a reflection below it, a refraction above),
     which `eval_ggx_dielectric` counts as the other lobe: such a sample is dropped, as Mitsuba drops it."""
-    t, b = orthonormal_basis(n)
+    t, b = tangent_frame(n, tangent)
     ox, oy, oz = local(wo, t, b, n)
     hx, hy, hz = sample_visible_normal(ox, oy, max(oz, 1e-9), au, av, u1, u2)
     o_h = ox * hx + oy * hy + oz * hz

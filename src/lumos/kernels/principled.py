@@ -53,6 +53,8 @@ from .texture import APPLY_BASE, APPLY_METAL_ROUGH, MODE_MULTIPLY, TEX_APPLY, TE
 from .vec import dot
 
 _INV_PI = 1.0 / np.pi
+#: its lobes are isotropic: any frame about the normal will do
+_NO_TANGENT = (0.0, 0.0, 0.0)
 #: the narrowest GGX width the model draws (r = 0.03): a smoother surface is a mirror the lobe cannot sample
 ALPHA_MIN = 1e-3
 
@@ -124,14 +126,14 @@ def eval_principled(kd, mat, p_d, p_s, n, wo, wi):
     cos_i = dot(n, wi)
     if cos_i <= 0.0:
         return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0
-    g, pdf_g, o_h = eval_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, wi)
+    g, pdf_g, o_h = eval_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, _NO_TANGENT, wo, wi)
     f, f_max = principled_fresnel(mat, o_h)
     c = (1.0 - f_max) * _INV_PI
     fd = (kd[0] * c, kd[1] * c, kd[2] * c)
     coat = mat[MAT_COAT_WEIGHT]
     if not coat > 0.0:
         return fd, (f[0] * g, f[1] * g, f[2] * g), p_d * cos_i * _INV_PI + p_s * pdf_g
-    g_c, pdf_c, _ = eval_ggx(mat[MAT_COAT_ALPHA], mat[MAT_COAT_ALPHA], n, wo, wi)
+    g_c, pdf_c, _ = eval_ggx(mat[MAT_COAT_ALPHA], mat[MAT_COAT_ALPHA], n, _NO_TANGENT, wo, wi)
     g *= 1.0 - coat
     g_c *= coat
     q = mat[MAT_COAT_SHARE]
@@ -144,5 +146,5 @@ def sample_principled(mat, n, wo, u, u1, u2):
     """A direction from the principled model's glossy lobes: the coat's visible GGX normals with probability
     MAT_COAT_SHARE (u below it), else the base's."""
     if u < mat[MAT_COAT_SHARE]:
-        return sample_ggx(mat[MAT_COAT_ALPHA], mat[MAT_COAT_ALPHA], n, wo, u1, u2)
-    return sample_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, wo, u1, u2)
+        return sample_ggx(mat[MAT_COAT_ALPHA], mat[MAT_COAT_ALPHA], n, _NO_TANGENT, wo, u1, u2)
+    return sample_ggx(mat[MAT_ALPHA], mat[MAT_ALPHA + 1], n, _NO_TANGENT, wo, u1, u2)

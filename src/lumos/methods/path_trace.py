@@ -55,12 +55,14 @@ from ..kernels.layout import (
     CAM_APERTURE,
     ENV_ENTRY,
     ENV_PRESENT,
+    MAT_ALPHA,
     MAT_BUMP,
     MAT_IOR,
     MAT_KT,
     MAT_MODEL,
     MAT_ONE_SIDED,
     MAT_SIZE,
+    MAT_TANGENT,
     MAT_TINT,
     MAT_TINT_T,
     MODEL_CLASSIC,
@@ -72,6 +74,7 @@ from ..kernels.rng import pixel_hash, pixel_sample_key, rand2_key, rand_key
 from ..kernels.sobol import pair_seed, sobol_block
 from ..kernels.sampling import truncated_gaussian
 from ..kernels.surface import offset_origin, shading_side, surface_at
+from ..kernels.tangents import surface_tangents
 from ..kernels.bump import bump_frame, bump_normal
 from ..kernels.texture import material_coeffs
 from ..kernels.vec import dot
@@ -250,6 +253,9 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
             kd, kt, wd, ws = principled_at(tex, mat, hit_row, u, v, p, dot(n_s, wo))
             mat = hit_row
             kr = (0.0, 0.0, 0.0)  # (a texture's classic targets do not reach it)
+        elif mat[MAT_ALPHA] != mat[MAT_ALPHA + 1]:  # anisotropic: αu along the surface's ∂p/∂u, in the thread's row
+            _anisotropic_at(surf, mat, hit_row, ref, hit[4], p, n_s, time)
+            mat = hit_row
         p_d, p_s, p_r, p_t = lobe_probs(wd, ws, kr, kt)
         if depth == 0:
             albedo = (min(wd[0] + ws[0] + kr[0] + kt[0], 1.0), min(wd[1] + ws[1] + kr[1] + kt[1], 1.0),
@@ -330,6 +336,16 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         o = offset_origin(p, n_geo, wi, config.RAY_EPSILON)
         d = wi
     return (L0, L1, L2), rays, first_t, first_obj, albedo, normal, (e0, e1, e2), (D0, D1, D2)
+
+
+@njit
+def _anisotropic_at(surf, mat, row, ref, part, p, n, time):
+    """The material row `mat` copied into `row` (the thread's own) with the hit's ∂p/∂u as its MAT_TANGENT, the
+    direction its GGX width αu lies along (`microfacet.tangent_frame`; as Mitsuba's shading frame)."""
+    for i in range(mat.shape[0]):
+        row[i] = mat[i]
+    dpdu = surface_tangents(surf, ref, part, p, n, time)[0]
+    row[MAT_TANGENT], row[MAT_TANGENT + 1], row[MAT_TANGENT + 2] = dpdu
 
 
 @njit_inline
