@@ -112,7 +112,7 @@ KEEP_SQUARES, KEEP_GUIDES, KEEP_DIRECT = 1, 2, 4
 @njit_alloc
 def _scratch():
     """Per-thread work arrays: the BVH stack, the media the path is inside (object, index of refraction), and a
-    material row for the hit's own values (`kernels.principled.principled_at`)."""
+    material row for the hit's own values (`kernels.principled.principled_at`, `_anisotropic_at`)."""
     return (np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK), np.empty(MAX_MEDIA, np.int64),
             np.empty(MAX_MEDIA), np.empty(MAT_SIZE))
 
