@@ -295,10 +295,8 @@ def test_whitted_and_raster_shadows_from_a_spot():
 # ---------------------------------------------------------------------------------- explain, info, errors
 
 def test_explain_names_the_spot_and_its_falloff():
-    """(raycast's explanation: whitted's and raster's print the same per-light shares of `illuminate_terms`, and
-    tests/tools/test_explain.py checks theirs; one method keeps this test from compiling a second explain family.)"""
     scene = _row_scene(HARD, ambient=0.2, ka=0.5)
-    for method in ("raycast",):
+    for method in ("raycast", "whitted"):
         img = lumos.render(scene, method=method).array
         inside = lumos.explain(scene, 100, 1, method=method)
         outside = lumos.explain(scene, 5, 1, method=method)
