@@ -126,3 +126,17 @@ def test_bad_principled_materials_are_one_line_errors(bad, message):
     with pytest.raises(lumos.LumosError) as info:
         lumos.load_scene(scene(bad))
     assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_transmitting_sheet_passes_what_its_glossy_lobe_does_not_reflect():
+    """glTF's thin-walled transmission: a white principled sheet of transmission 1, nearly smooth, before an even
+    white sky reflects F and passes 1 − F of it, so it shows the sky's own radiance, 1; counted twice (the
+    glossy lobe's reflection and the glass's own) it would show F more."""
+    scene = {"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 30},
+             "environment": {"color": [1, 1, 1]},
+             "materials": {"m": {"principled": {"base_color": 1.0, "metallic": 0.0, "roughness": 0.05,
+                                                "transmission": 1.0}}},
+             "objects": [{"type": "rect", "corner": [-1, -1, 0], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0],
+                          "material": "m"}]}
+    img = lumos.render(scene, method="path", width=16, height=16, spp=64, seed=2).array
+    np.testing.assert_allclose(img[4:12, 4:12].mean(axis=(0, 1)), 1.0, atol=0.01)

@@ -12,7 +12,9 @@ metallic m and perceptual roughness r (GGX α = r², `kernels.microfacet`), h th
     F(c)   = (1 − m)·F_d(c) + m·(b + (1 − b)·(1 − c)⁵)   the metal's Schlick Fresnel has F0 = b
 
 and `transmission` t hands that share of the dielectric's base on to smooth glass of index MAT_IOR (the path
-tracer's transmission lobe kt = (1 − m)·t·b, `methods.path_trace._transmit`). KHR_materials_clearcoat lays a
+tracer's transmission lobe kt = (1 − m)·t·b·(1 − max F_d(n·wo)): what the glossy lobe does not reflect,
+`methods.path_trace._transmit`; on a surface that bounds no solid, as glTF's meshes, it passes straight through,
+glTF's thin-walled reading). KHR_materials_clearcoat lays a
 clear coat of factor c and width α_c over all of it (the extension's fresnel_coat):
 
     f_coated = (1 − c·Fc(n·wo))·f + c·Fc(n·wo)·D_c·G_c/(4·cos θo·cos θi),   Fc(x) = 0.04 + 0.96·(1 − x)⁵ G is Smith's separable
@@ -101,7 +103,9 @@ def principled_at(tex, mat, row, u, v, p, cos_o):
     under = 1.0 - coat
     ws = (f0 * under + coat, f1 * under + coat, f2 * under + coat)
     row[MAT_COAT_SHARE] = 3.0 * coat / (ws[0] + ws[1] + ws[2]) if coat > 0.0 else 0.0
-    return kd, kt, (kd[0] * k, kd[1] * k, kd[2] * k), ws
+    # the transmitted share is what the glossy lobe does not reflect, as the base's: 1 − max F_d at n·wo (a smooth
+    # lobe has no half vector but the normal)
+    return kd, (kt[0] * k, kt[1] * k, kt[2] * k), (kd[0] * k, kd[1] * k, kd[2] * k), ws
 
 
 @njit
