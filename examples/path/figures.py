@@ -303,7 +303,8 @@ def helmet_figure():
     displayed 8-bit values over the helmet's pixels."""
     from PIL import Image
 
-    img = render(load("helmet.yaml"), "helmet.yaml", spp=spp(load("helmet.yaml").render.spp), aov=["object_id"])
+    scene = load("helmet.yaml")
+    img = render(scene, "helmet.yaml", spp=spp(scene.render.spp), aov=["object_id"])
     ours = png8(img.array, img.exposure)
     panels = [(f"lumos path, {img.stats['spp']} spp, {img.stats['render_s']:.0f} s", ours)]
     three = ROOT / "docs" / "images" / "path" / "helmet_three.png"
@@ -318,7 +319,8 @@ def helmet_figure():
 
 def grid_figure():
     """material_grid.yaml as its file says: glTF's metallic (rows) × roughness (columns) under the courtyard."""
-    img = render(load("material_grid.yaml"), "material_grid.yaml", spp=spp(load("material_grid.yaml").render.spp))
+    scene = load("material_grid.yaml")
+    img = render(scene, "material_grid.yaml", spp=spp(scene.render.spp))
     measured("material_grid", f"{img.stats['spp']} spp render_s", f"{img.stats['render_s']:.1f}")
     save(png8(img.array, img.exposure), "material_grid.png")
 

@@ -129,13 +129,15 @@ def main() -> None:
     ap.add_argument("--background-only", action="store_true", help="environment only, no helmet")
     args = ap.parse_args()
     missing = [n for n in ("chromium", "chromedriver") if shutil.which(n) is None]
+    problem = None
     if missing:
-        sys.exit(print(f"error: {' and '.join(missing)} not found (apt-get install chromium chromium-driver)",
-                       file=sys.stderr) or 2)
-    if not (args.three / "build" / "three.module.js").is_file():
-        sys.exit(print(f"error: {args.three} is not an unpacked npm 'three' package "
-                       "(no build/three.module.js); run: npm pack three && tar xzf three-*.tgz",
-                       file=sys.stderr) or 2)
+        problem = f"{' and '.join(missing)} not found (apt-get install chromium chromium-driver)"
+    elif not (args.three / "build" / "three.module.js").is_file():
+        problem = (f"{args.three} is not an unpacked npm 'three' package (no build/three.module.js); run: "
+                   "npm pack three && tar xzf three-*.tgz")
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        sys.exit(2)
     png = render(args.three, args.size, "bg=1" if args.background_only else "")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_bytes(png)

@@ -142,6 +142,8 @@ def _dielectric_columns(row: np.ndarray, glass) -> None:
 
 def _principled_columns(row: np.ndarray, principled) -> None:
     """The physical model's columns of glTF's metallic–roughness material: its factors (`kernels.principled`)."""
+    from ..kernels.principled import ALPHA_MIN
+
     row[L.MAT_MODEL] = L.MODEL_PRINCIPLED
     row[L.MAT_BASE : L.MAT_BASE + 3] = principled.base_color
     row[L.MAT_METALLIC] = principled.metallic
@@ -151,7 +153,7 @@ def _principled_columns(row: np.ndarray, principled) -> None:
     row[L.MAT_F0 : L.MAT_F0 + 3] = principled.f0
     row[L.MAT_F90] = principled.specular
     row[L.MAT_CLEARCOAT] = principled.clearcoat
-    row[L.MAT_COAT_ALPHA] = max(principled.clearcoat_roughness**2, 1e-3)  # (kernels.principled.ALPHA_MIN)
+    row[L.MAT_COAT_ALPHA] = max(principled.clearcoat_roughness**2, ALPHA_MIN)
 
 
 class _Shapes:
