@@ -1,6 +1,6 @@
 """Render the before/after figures of docs/methods/raster.md from the scenes in this folder.
 
-    python examples/raster/figures.py    # writes docs/images/raster/*.png: seconds, a minute while Numba compiles
+    python examples/raster/figures.py [NAME ...]   # writes docs/images/raster/*.png (only NAME.png with names)
 
 Each figure loads one scene (`lumos.load_scene`), renders it twice or more with one key changed (a mesh key
 set on the loaded scene, or a setting given to `lumos.render`), and puts the renders side by side with a
@@ -195,11 +195,25 @@ def terms_figure():
     save(compose(panels, 4), "terms.png")
 
 
+def environment_figure():
+    """The DamagedHelmet under the courtyard HDR (examples/path/helmet.yaml): raster and raycast with the
+    environment's irradiance, glossy and mirror reflection, beside path."""
+    scene = lumos.load_scene(HERE.parent / "path" / "helmet.yaml")
+    size = dict(width=384, height=384)
+    panels = [("raster, Phong, 8 passes", shot(scene, method="raster", spp=8, **size)),
+              ("raycast, 4 spp", shot(scene, method="raycast", spp=4, **size)),
+              ("path, 128 spp", shot(scene, method="path", spp=128, **size))]
+    save(compose(panels, 3), "environment.png")
+
+
 def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
+    only = sys.argv[1:]  # figure names (e.g. `environment`) to make only those
     for make in (shading_figure, sheet_figure, t_junctions_figure, subdivision_figure, orientation_figure,
-                 perspective_figure, crease_figure, csg_figure, mipmap_figure, affine_uvs_figure, terms_figure):
-        make()
+                 perspective_figure, crease_figure, csg_figure, mipmap_figure, affine_uvs_figure, terms_figure,
+                 environment_figure):
+        if not only or make.__name__.removesuffix("_figure") in only:
+            make()
 
 
 if __name__ == "__main__":

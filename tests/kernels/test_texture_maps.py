@@ -33,7 +33,7 @@ def scene_of(material, objects=None, lights=(), camera=TOP, ambient=0.0):
 def coeffs_at(compiled, u, v, mat_id=0):
     """(ka, kd, ks, kr, emission) of material row `mat_id` of a compiled scene at (u, v), as an array (5, 3)."""
     tex = textures_of(compiled.arrays)
-    return np.array(material_coeffs(tex, compiled.arrays.materials[mat_id], float(u), float(v), ORIGIN))
+    return np.array(material_coeffs(tex, compiled.arrays.materials[mat_id], float(u), float(v), ORIGIN)[:5])
 
 
 def render(scene, method, size=32, **kw):

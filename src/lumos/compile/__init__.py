@@ -56,10 +56,11 @@ class CompiledScene:
 class _Materials:
     """Material rows, deduplicated by identity (a named material used by ten objects is one row)."""
 
-    def __init__(self):
+    def __init__(self, environment_lit: bool = False):
         self.rows: list[np.ndarray] = []
         self.index: dict[int, int] = {}
         self.materials: list = []  # the scene's Material of each row added by `add` (emitters have none)
+        self.environment_lit = environment_lit  # physical materials' classic reading (`Material.classic`)
 
     def add(self, material, one_sided: bool = False) -> int:
         """The row of a scene Material (`one_sided`: its emission leaves the front only, `MAT_ONE_SIDED`)."""
@@ -76,19 +77,20 @@ class _Materials:
         self.materials.append(material)
         return len(self.rows) - 1
 
-    @staticmethod
-    def _row(material, emission, one_sided: bool) -> np.ndarray:
+    def _row(self, material, emission, one_sided: bool) -> np.ndarray:
         row = np.zeros(L.MAT_SIZE)
         row[L.MAT_SHININESS] = 1.0
         row[L.MAT_IOR] = 1.0
         if material is not None:
-            classic = material.classic()  # (a physical model's classic reading, where not given)
+            classic = material.classic(self.environment_lit)  # (a physical model's reading, where not given)
             model = material.physical
             if model is not None:
                 columns = (_conductor_columns if material.conductor is not None else
                            _plastic_columns if material.plastic is not None else
                            _dielectric_columns if material.dielectric is not None else _principled_columns)
                 columns(row, model)
+                if material.principled is not None:  # (its textured reading, `kernels.principled_classic`)
+                    row[L.MAT_KA_REFLECTS] = 0.0 if self.environment_lit else 1.0
             row[L.MAT_KA : L.MAT_KA + 3] = classic["ka"]
             row[L.MAT_KD : L.MAT_KD + 3] = classic["kd"]
             row[L.MAT_KS : L.MAT_KS + 3] = classic["ks"]
@@ -260,7 +262,7 @@ def compile_scene(scene, reuse: Optional[CompiledScene] = None) -> CompiledScene
     """Flatten a validated `Scene` into `SceneArrays` (analytic shapes as themselves, meshes as triangles) and
     build its BVH; with `reuse` (an earlier compile) its BVH is taken as it is when the primitives' bounds are
     the same to the bit (an edit of materials or lights only: the live preview), and `bvh_build_s` is 0."""
-    materials = _Materials()
+    materials = _Materials(environment_lights_model(scene))
     shapes = _Shapes(scene.camera.shutter)
     tri_parts = []  # (verts, normals, uvs, material, object)
     names = []
@@ -291,24 +293,31 @@ def compile_scene(scene, reuse: Optional[CompiledScene] = None) -> CompiledScene
     return _assemble(scene, materials, shapes, tri_parts, lights, names, reuse)
 
 
+def environment_lights_model(scene) -> bool:
+    """Whether the scene's environment lights the classic model of the local methods: it has one and gives no
+    `ambient` of its own."""
+    return getattr(scene, "environment", None) is not None and "ambient" not in getattr(scene, "model_fields_set", ())
+
+
 def _ambient_and_background(scene, env_pixels: Optional[np.ndarray],
                             rotation: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Ia (`layout.AMBIENT_ROWS` rows) and what rays that miss see where the environment is not looked up: the
-    scene's `ambient` and `background`; with an environment (its `env_pixels`, turned `rotation` degrees), its
-    mean radiance for the background, and for Ia, where the scene gives no `ambient`, its irradiance over π by the
-    surface's normal: a white diffuse surface (ka 1) under a uniform sky L shows L, under a sky with a sun it is
-    brighter on the side that faces the sun, the classic Ka·Ia made physical."""
+    """Ia (`layout.AMBIENT_ROWS` rows, and the environment's glossy reflection after them) and what rays that miss
+    see where the environment is not looked up: the scene's `ambient` and `background`; with an environment (its
+    `env_pixels`, turned `rotation` degrees), its mean radiance for the background, and where the scene gives no
+    `ambient`, for Ia its irradiance over π by the surface's normal (a white diffuse surface, ka 1, under a uniform
+    sky L shows L; under a sky with a sun it is brighter on the side that faces the sun: the classic Ka·Ia made
+    physical) and for Ks its radiance through the material's Phong lobe (`environment.glossy_levels`)."""
     constant = np.array([scene.ambient], dtype=np.float64)
     background = np.array(scene.background, dtype=np.float64)
     if env_pixels is None:
         return constant, background
-    from .environment import irradiance_sh, mean_radiance
+    from .environment import glossy_levels, irradiance_sh, mean_radiance
 
-    if "ambient" in getattr(scene, "model_fields_set", ()):
+    if not environment_lights_model(scene):
         return constant, mean_radiance(env_pixels)
     ambient = np.zeros((L.AMBIENT_ROWS, 3))
     ambient[1:] = irradiance_sh(env_pixels, rotation)
-    return ambient, mean_radiance(env_pixels)
+    return np.concatenate([ambient, glossy_levels(env_pixels, rotation)]), mean_radiance(env_pixels)
 
 
 def _material_names(scene, materials: _Materials) -> list[str]:
@@ -326,7 +335,7 @@ def compile_raster(scene, tessellation: int, shadows: bool) -> CompiledScene:
     """The scene for scan conversion: its objects as polygons (`CompiledScene.raster`, shapes tessellated with
     `tessellation` segments) and, for the optional shadow rays (`shadows`), a BVH over those same polygons
     instead of the analytic shapes."""
-    materials = _Materials()
+    materials = _Materials(environment_lights_model(scene))
     names = [obj.name or f"{obj.type}#{i}" for i, obj in enumerate(scene.objects)]
     object_materials = [materials.add(scene.material_of(obj), one_sided=not obj.two_sided) for obj in scene.objects]
     emitters = []

@@ -95,6 +95,89 @@ def irradiance_sh(pixels: np.ndarray, rotation: float = 0.0) -> np.ndarray:
     return coefficients * np.array([1.0] + [2.0 / 3.0] * 3 + [0.25] * 5)[:, None]
 
 
+#: the exponents of the glossy levels are GLOSSY_BASE^k for k < GLOSSY_LEVELS: 1, 4, 16, ... 16384 (a Phong
+#: lobe of exponent n is about 1/sqrt(n) radians wide: 57° down to 0.45°)
+GLOSSY_LEVELS = 8
+#: the widest glossy level, in texels (the sharp ones are at most this fine: 0.7° texels)
+GLOSSY_MAX_WIDTH = 512
+
+
+def glossy_levels(pixels: np.ndarray, rotation: float = 0.0) -> np.ndarray:
+    """float64 (rows, 3): the environment's glossy reflection as the kernels read it from `layout.GLOSSY_HEADER`
+    on (`kernels.environment.glossy_radiance`): for each exponent n = GLOSSY_BASE^k, the lat-long image of
+
+        L_n(r) = ∫ L(ω) · (n + 1)/(2π) · max(r·ω, 0)^n dω,
+
+    the radiance a surface sees in its mirror direction r through a normalised Phong lobe, at a resolution of
+    about 2.5 texels per lobe width (GLOSSY_MAX_WIDTH at most, never finer than the image). Each level is the image
+    (averaged down to that resolution, every pixel weighted by its solid angle) convolved with the lobe along each
+    row by FFT: the lobe between a row at θi and one at θj depends only on their difference in φ. The weights of
+    each texel are normalised to sum to one, so a uniform environment gives its radiance at every exponent."""
+    from ..kernels.layout import GLOSSY_BASE, GLOSSY_HEADER
+
+    src = np.asarray(pixels, np.float64)
+    H, W = src.shape[:2]
+    levels = []
+    for k in range(GLOSSY_LEVELS):
+        n = GLOSSY_BASE ** k
+        width = 1 << int(np.ceil(np.log2(2.0 * np.pi * 2.5 * np.sqrt(n))))  # 2.5 texels per lobe width 1/sqrt(n)
+        w = min(W, min(max(width, 32), GLOSSY_MAX_WIDTH))
+        h = min(H, max(1, w // 2))
+        levels.append(_phong_convolve(_average_down(src, h, w), n))
+    rows = [np.array([[len(levels), np.cos(np.radians(rotation)), np.sin(np.radians(rotation))]])]
+    first = GLOSSY_HEADER + 1 + len(levels)  # (rows of the whole ambient array, which these follow)
+    table = np.zeros((len(levels), 3))
+    for k, level in enumerate(levels):
+        table[k] = first, level.shape[1], level.shape[0]
+        first += level.shape[0] * level.shape[1]
+    rows.append(table)
+    rows.extend(level.reshape(-1, 3) for level in levels)
+    return np.concatenate(rows)
+
+
+def _row_solid_angles(h: int, w: int) -> np.ndarray:
+    """The solid angle of a pixel in each of the h rows of a w-wide lat-long image."""
+    edges = np.cos(np.arange(h + 1) / h * np.pi)
+    return (edges[:-1] - edges[1:]) * 2.0 * np.pi / w
+
+
+def _average_down(src: np.ndarray, h: int, w: int) -> np.ndarray:
+    """The lat-long image src averaged down to h × w: each pixel goes wholly to the one its centre falls in,
+    weighted by its solid angle."""
+    H, W = src.shape[:2]
+    if (h, w) == (H, W):
+        return src
+    rows = ((np.arange(H) + 0.5) * h / H).astype(np.int64)
+    cols = ((np.arange(W) + 0.5) * w / W).astype(np.int64)
+    weight = np.repeat(_row_solid_angles(H, W)[:, None], W, axis=1)
+    index = (rows[:, None] * w + cols[None, :]).ravel()
+    total = np.bincount(index, weight.ravel(), minlength=h * w)
+    out = np.stack([np.bincount(index, (src[..., c] * weight).ravel(), minlength=h * w) for c in range(3)], axis=-1)
+    return (out / np.maximum(total, 1e-300)[:, None]).reshape(h, w, 3)
+
+
+def _phong_convolve(image: np.ndarray, n: float) -> np.ndarray:
+    """L_n (`glossy_levels`) at the centres of the texels of the lat-long image, constant over each of its pixels.
+    The lobe is cut where max(r·ω, 0)^n falls below 1e-6 of its peak (rows further from θi take no part)."""
+    h, w = image.shape[:2]
+    theta = (np.arange(h) + 0.5) / h * np.pi
+    omega = _row_solid_angles(h, w)
+    cos_dphi = np.cos(np.arange(w) * 2.0 * np.pi / w)
+    reach = np.arccos(min(1.0, 1e-6 ** (1.0 / n))) + np.pi / h  # the lobe's extent, and half a row either side
+    spectra = np.fft.rfft(image, axis=1)  # (h, w//2 + 1, 3)
+    out = np.empty_like(image)
+    for i in range(h):
+        js = np.nonzero(np.abs(theta - theta[i]) <= reach)[0]
+        cos_g = (np.cos(theta[i]) * np.cos(theta[js])[:, None]
+                 + np.sin(theta[i]) * np.sin(theta[js])[:, None] * cos_dphi[None, :])
+        kernel = np.maximum(cos_g, 0.0) ** n * omega[js][:, None]  # (rows, w): the lobe over Δφ from row i
+        total = kernel.sum()
+        kernel_spectra = np.fft.rfft(kernel, axis=1)
+        row = np.einsum("jf,jfc->fc", kernel_spectra, spectra[js])
+        out[i] = np.fft.irfft(row, n=w, axis=0) / total
+    return out
+
+
 def environment_arrays(env) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The arrays of a scene-model Environment (`image_arrays` of its image and rotation); an empty 1×1 black
     environment when `env` is None."""

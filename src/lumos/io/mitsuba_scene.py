@@ -248,7 +248,8 @@ class SceneBuilder:
         self.ctx.at(("environment",), node.where)
         self.background = self.background + np.asarray(rgb, np.float64)
         self.ctx.warn(("background",), node.where, f"{node.type}: the environment lights the scene in path "
-                      f"(rays that escape see it); raycast, whitted and raster show it as the background colour only")
+                      f"(rays that escape see it); raycast, whitted and raster read it as unshadowed ambient light and "
+                      f"reflect it")
 
     def _envmap(self, node: Node) -> None:
         """An envmap as lumos's image environment. Mitsuba's latitude–longitude map looks along −z at its left

@@ -4,8 +4,8 @@ normal map, at a point or filtered over a footprint (the textures' table and loo
     dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time)  # the surface's tangents, or a mesh's
     n_bumped = bump_normal(tex, mat, u, v, p, n, dpdu, dpdv)        # unit; n itself when there is no bump map
     n_bumped = bump_normal_filtered(tex, mat, u, v, p, n, dpdu, dpdv, dudx, dvdx, dudy, dvdy)
-    ka, kd, ks, kr, ke, n_bumped = material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n, u, v, d, width,
-                                                    time)  # the ray methods' hit: both, over a ray cone
+    ka, kd, ks, kr, ke, shininess, n_bumped = material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n, u,
+                                                               v, d, width, time)  # a ray's hit: both, over its cone
 
 ## Bump mapping (Blinn 1978, "Simulation of wrinkled surfaces", eq. 4 without the small terms)
 
@@ -183,15 +183,15 @@ def bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time):
 
 @njit_inline
 def material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n_sh, u, v, d, width, time):
-    """What a ray method needs of the material row `mat` at a hit: (ka, kd, ks, kr, ke) with its textures applied
-    and the shading normal with its bump or normal map, both filtered over the footprint of a ray cone `width`
+    """What a ray method needs of the material row `mat` at a hit: (ka, kd, ks, kr, ke, shininess) with its
+    textures applied and the shading normal with its bump or normal map, both filtered over the footprint of a ray cone `width`
     wide there (`texture.cone_footprint`; width 0: point lookups), for a ray of unit direction d meeting the
     surface (`ref`, `part`, barycentrics b1, b2) at p, geometric normal n_geo."""
     fp = (0.0, 0.0, 0.0, 0.0)
     if mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0:
         fp = cone_footprint(surf, ref, part, p, n_geo, d, width, time)
-    ka, kd, ks, kr, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
+    ka, kd, ks, kr, ke, shininess = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
     if mat[MAT_BUMP] >= 0.0:
         dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n_sh, time)
         n_sh = bump_normal_filtered(tex, mat, u, v, p, n_sh, dpdu, dpdv, fp[0], fp[1], fp[2], fp[3])
-    return ka, kd, ks, kr, ke, n_sh
+    return ka, kd, ks, kr, ke, shininess, n_sh

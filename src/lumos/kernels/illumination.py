@@ -9,6 +9,12 @@ radiance Le is sampled at `samples` stratified points; each sample y acts as a p
 Le·cosθ_y·A / (π·r²·N), so that its diffuse part is Kd·E/π with E the irradiance the light delivers
 (DESIGN.md §3). A sphere light is sampled uniformly in the cone it subtends (intensity Le·Ω/(π·N)).
 
+With an environment that lights the model (no `ambient` given), Ia is its irradiance over π by the normal
+(`ambient_light`) and the specular term gains its glossy reflection, Ks·L_n(R_V) with R_V = 2(N·V)N − V the
+mirror direction and L_n the environment seen through a normalised Phong lobe of the material's exponent
+(`environment.glossy_radiance`): each direction of the sky a light, the way Ia is its diffuse part, with the lobe
+normalised so that Ks is the share of a uniform sky a glossy surface reflects. Neither is shadowed.
+
 With `shadows` set, each light sample is tested with a shadow ray: opaque objects block it, transparent ones
 let their kt through, the holes of opacity cut-outs let everything through (`shadow_transmittance`); raycast
 passes False.
@@ -17,8 +23,10 @@ passes False.
 import math
 
 from .. import config
+from .environment import glossy_radiance
 from .jit import njit, njit_inline
 from .layout import (
+    AMBIENT_ROWS,
     LIGHT_DIRECTIONAL,
     LIGHT_DISK,
     LIGHT_POINT,
@@ -251,7 +259,7 @@ def ambient_light(amb, n):
     basis = (_SH0, _SH1 * y, _SH1 * z, _SH1 * x, _SH2 * x * y, _SH2 * y * z, _SH20 * (3.0 * z * z - 1.0), _SH2 * x * z,
              _SH22 * (x * x - y * y))
     r, g, b = amb[0, 0], amb[0, 1], amb[0, 2]
-    for k in range(amb.shape[0] - 1):  # (one row, the constant, without an environment to read)
+    for k in range(min(amb.shape[0], AMBIENT_ROWS) - 1):  # (one row, the constant, without an environment to read)
         r += amb[k + 1, 0] * basis[k]
         g += amb[k + 1, 1] * basis[k]
         b += amb[k + 1, 2] * basis[k]
@@ -335,6 +343,12 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
             sr += sp[0] * tr
             sg += sp[1] * tg
             sb += sp[2] * tb
+    if lit.ambient.shape[0] > AMBIENT_ROWS:  # an environment that lights the model: its glossy reflection too
+        c = 2.0 * dot(n, V)
+        gr, gg, gb = glossy_radiance(lit.ambient, (c * n[0] - V[0], c * n[1] - V[1], c * n[2] - V[2]), shininess)
+        sr += ks[0] * gr
+        sg += ks[1] * gg
+        sb += ks[2] * gb
     return ambient, (dr, dg, db), (sr, sg, sb), rays
 
 

@@ -75,6 +75,7 @@ MAT_CLEARCOAT = 39  # KHR_materials_clearcoat: the coat's factor c (0: none)
 MAT_COAT_ALPHA = 40  # its GGX width (clearcoatRoughness²)
 MAT_COAT_WEIGHT = 41  # per hit: c·Fc(n·wo), the share of the light the coat takes (Schlick, F0 0.04)
 MAT_COAT_SHARE = 42  # per hit: the probability of sampling the coat's lobe rather than the base's glossy one
+MAT_KA_REFLECTS = 43  # 1.0: its classic ka includes what it reflects (no environment lights the model)
 # conductor, dielectric (columns the plastic's coat table holds in a plastic's row): per hit, the surface's ∂p/∂u,
 # the direction αu lies along (`microfacet.tangent_frame`); (0, 0, 0) in the material's own row
 MAT_TANGENT = 60
@@ -89,6 +90,13 @@ MODEL_PRINCIPLED = 4  # glTF's metallic–roughness: a metal and a dielectric ov
 # its irradiance E(n)/π in the nine real spherical harmonics of bands 0-2 (Ramamoorthi & Hanrahan 2001: the
 # clamped cosine keeps l <= 2 to within a few per cent)
 AMBIENT_ROWS = 10
+# With an environment that lights the local model, the ambient array goes on with its glossy reflection
+# (`compile.environment.glossy_levels`, `environment.glossy_radiance`): row GLOSSY_HEADER = (level count K, cos and
+# sin of the environment's rotation), then one row per level k = (its first texel row, width, height), then the
+# texels: level k is the lat-long image convolved with the normalised Phong lobe of exponent GLOSSY_BASE^k about
+# each texel's direction, `width` texels a row from its first row on.
+GLOSSY_HEADER = AMBIENT_ROWS
+GLOSSY_BASE = 4.0
 
 # Light kinds and columns. Kinds up to LIGHT_DIRECTIONAL are delta lights (one direction per shading point, no
 # random samples); the kinds above them are area lights.
@@ -212,8 +220,8 @@ SceneArrays = namedtuple(
         "light_vecs",  # float64 (nl, 6, 3)
         "light_scalars",  # float64 (nl, LS_SIZE)
         "ambient",  # float64 (AMBIENT_ROWS, 3): Ia(n) = row 0 + Σ_k row k · Y_k(n), the rows 1-9 the irradiance over
-        # π of the environment in real spherical harmonics up to l = 2 (`illumination.ambient_light`); (1, 3), the
-        # constant alone, where no environment is read
+        # π of the environment in real spherical harmonics up to l = 2 (`illumination.ambient_light`), then its
+        # glossy reflection (GLOSSY_HEADER on); (1, 3), the constant alone, where no environment is read
         "background",  # float64 (3,)
         "env_pixels",  # float32 (H, W, 3): the environment's lat-long radiance (1×1 black without one)
         "env_info",  # float64 (ENV_INFO_SIZE,): present, rotation, size (compile.environment)

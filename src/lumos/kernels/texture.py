@@ -1,13 +1,13 @@
 """Textures, UV derivatives and bump mapping at a hit: what the ray methods call between `surface_at` and the
 illumination model.
 
-    ka, kd, ks, kr, ke = material_coeffs(tex, mat, u, v, p)         # the textures applied in list order
+    ka, kd, ks, kr, ke, n = material_coeffs(tex, mat, u, v, p)      # the textures applied in list order
     dpdu, dpdv = surface_tangents(surf, ref, part, p, n, time)     # world-space ∂p/∂u, ∂p/∂v
     dpdu, dpdv = bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time)  # the same, or a mesh's tangents
     (bump maps: `kernels.bump`)
     hole = is_hole(tex, mat, u, v, p)                               # an opacity texture's α < ALPHA_CUTOFF
     fp = cone_footprint(surf, ref, part, p, n_geo, d, width, time)  # a ray cone's (du/dx, dv/dx, du/dy, dv/dy)
-    ka, kd, ks, kr, ke = material_coeffs_filtered(tex, mat, u, v, p, *fp)       # filtered over it
+    ka, kd, ks, kr, ke, n = material_coeffs_filtered(tex, mat, u, v, p, *fp)    # filtered over it
     n_bumped = bump_normal_filtered(tex, mat, u, v, p, n, dpdu, dpdv, *fp)
 
 * `tex` is a `layout.Textures` view (`views.textures_of`), `surf` a `layout.Surfaces` view.
@@ -100,14 +100,21 @@ import numpy as np
 
 from .jit import njit, njit_inline
 from .layout import (
+    MAT_BASE,
     MAT_EMISSION,
     MAT_KA,
     MAT_KD,
     MAT_KR,
     MAT_KS,
+    MAT_METALLIC,
+    MAT_MODEL,
+    MAT_ROUGHNESS,
+    MAT_SHININESS,
     MAT_TEXTURE,
     MAT_TEXTURE_COUNT,
+    MODEL_PRINCIPLED,
 )
+from .principled_classic import principled_classic
 from .tangents import surface_tangents
 from .vec import cross, dot, length, orthonormal_basis
 
@@ -383,9 +390,9 @@ def noise01(s, t, period_s, period_t):
 
 @njit_inline
 def material_coeffs(tex, mat, u, v, p):
-    """(ka, kd, ks, kr, emission), each an RGB tuple: the material row's coefficients with its textures applied
-    at (u, v) in list order, each replacing or multiplying the coefficients of its apply_to mask. No textures:
-    the row's own values."""
+    """(ka, kd, ks, kr, emission, shininess), the first five RGB tuples: the material row's coefficients with its
+    textures applied at (u, v) in list order, each replacing or multiplying the coefficients of its apply_to mask,
+    and its Phong exponent. No textures: the row's own values."""
     return material_coeffs_filtered(tex, mat, u, v, p, 0.0, 0.0, 0.0, 0.0)
 
 
@@ -399,7 +406,8 @@ def _apply(mode, old, color):
 @njit_inline
 def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
     """`material_coeffs` with the textures filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy); a zero
-    footprint is the point lookup."""
+    footprint is the point lookup. A textured principled material's coefficients and exponent follow its base
+    colour, metallic and roughness at the point (`principled_coeffs_filtered`)."""
     ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
     kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
     ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
@@ -407,11 +415,13 @@ def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
     ke = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
     first = np.int64(mat[MAT_TEXTURE])
     if first < 0:
-        return ka, kd, ks, kr, ke
+        return ka, kd, ks, kr, ke, mat[MAT_SHININESS]
+    if mat[MAT_MODEL] == MODEL_PRINCIPLED:
+        return principled_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy)
     for row in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
         mask = np.int64(tex.tex_info[row, TEX_APPLY])
         if (mask & APPLY_COEFFS) == 0:
-            continue  # a coverage row, or one a principled material reads (kernels.principled)
+            continue  # a coverage row
         color = texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy)
         mode = tex.tex_info[row, TEX_MODE]
         if mask & APPLY_KA:
@@ -424,7 +434,38 @@ def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
             kr = _apply(mode, kr, color)
         if mask & APPLY_EMISSION:
             ke = _apply(mode, ke, color)
-    return ka, kd, ks, kr, ke
+    return ka, kd, ks, kr, ke, mat[MAT_SHININESS]
+
+
+@njit
+def principled_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
+    """`material_coeffs_filtered` of a textured principled material: its classic reading at the point
+    (`principled_classic`) from its base colour, metallic and roughness there, its occlusion rows (APPLY_KA)
+    multiplying ka and its emission rows the emission; no other coefficient texture applies to it (as in `path`).
+    (Called, not inlined: the classic materials' loop stays as small as it was.)"""
+    ke = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
+    base = (mat[MAT_BASE], mat[MAT_BASE + 1], mat[MAT_BASE + 2])
+    metallic, roughness = mat[MAT_METALLIC], mat[MAT_ROUGHNESS]
+    occlusion = (1.0, 1.0, 1.0)
+    first = np.int64(mat[MAT_TEXTURE])
+    for row in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
+        mask = np.int64(tex.tex_info[row, TEX_APPLY])
+        if (mask & (APPLY_BASE | APPLY_METAL_ROUGH | APPLY_KA | APPLY_EMISSION)) == 0:
+            continue
+        color = texture_rgb_filtered(tex, row, u, v, p, dudx, dvdx, dudy, dvdy)
+        mode = tex.tex_info[row, TEX_MODE]
+        if mask & APPLY_METAL_ROUGH:  # (raw texels: metallic in blue, roughness in green, as glTF's)
+            metallic *= color[2]
+            roughness *= color[1]
+        elif mask & APPLY_BASE:
+            base = _apply(mode, base, color)
+        else:
+            if mask & APPLY_KA:
+                occlusion = _apply(mode, occlusion, color)
+            if mask & APPLY_EMISSION:
+                ke = _apply(mode, ke, color)
+    ka, kd, ks, kr, shininess = principled_classic(mat, base, metallic, roughness)
+    return (ka[0] * occlusion[0], ka[1] * occlusion[1], ka[2] * occlusion[2]), kd, ks, kr, ke, shininess
 
 
 @njit_inline

@@ -222,7 +222,7 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
         mat = lit.materials[mat_id]
         wo = (-d[0], -d[1], -d[2])
         entering = n_geo[0] * d[0] + n_geo[1] * d[1] + n_geo[2] * d[2] < 0.0
-        ka, kd, ks, kr, le = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
+        ka, kd, ks, kr, le, _ = material_coeffs(tex, mat, u, v, p)  # the material's, with its textures applied
         # stage 2: emission found by the BSDF-sampled ray, weighted against light sampling
         le0, le1, le2 = le
         if (le0 > 0.0 or le1 > 0.0 or le2 > 0.0) and (entering or mat[MAT_ONE_SIDED] == 0.0):

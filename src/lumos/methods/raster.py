@@ -26,10 +26,11 @@ import numpy as np
 from .. import config
 from ..compile.camera import camera_arrays
 from ..kernels import raster as R
+from ..kernels.environment import mirrored_environment
 from ..kernels.illumination import PER_LIGHT_SIZE, ambient_light, illuminate_terms
 from ..kernels.jit import njit, njit_inline, njit_serial
-from ..kernels.layout import (CAM_HALF_SIZE, CAM_TAN_HALF_FOV, MAT_BUMP, MAT_CUTOUT, MAT_EMISSION,
-                              MAT_KA, MAT_KD, MAT_KS, MAT_ONE_SIDED, MAT_SHININESS, MAT_SIZE, MAT_TEXTURE,
+from ..kernels.layout import (AMBIENT_ROWS, CAM_HALF_SIZE, CAM_TAN_HALF_FOV, MAT_BUMP, MAT_CUTOUT, MAT_EMISSION,
+                              MAT_KA, MAT_KD, MAT_KR, MAT_KS, MAT_ONE_SIDED, MAT_SHININESS, MAT_SIZE, MAT_TEXTURE,
                               Textures)
 from ..kernels.rng import rand01
 from ..kernels.sampling import stratified_2d
@@ -85,16 +86,16 @@ def _facing(n, V):
 
 @njit_inline
 def _surface_at(tex, mat, p, n, u, v, frame, footprint):
-    """(ka, kd, ks, emission, shading normal): the material's coefficients at (u, v), filtered over `footprint`
-    (du/dx, dv/dx, du/dy, dv/dy), and n tilted by its bump map or given by its normal map, filtered over the
-    same footprint (the polygon's ∂p/∂u, ∂p/∂v in frame[0:6]; normal maps take their tangent frame from these,
-    not from a mesh's tangents)."""
-    ka, kd, ks, _, ke = material_coeffs_filtered(tex, mat, u, v, p, footprint[0], footprint[1], footprint[2],
-                                                 footprint[3])
+    """(ka, kd, ks, emission, shininess, shading normal): the material's coefficients at (u, v), filtered over
+    `footprint` (du/dx, dv/dx, du/dy, dv/dy), and n tilted by its bump map or given by its normal map, filtered
+    over the same footprint (the polygon's ∂p/∂u, ∂p/∂v in frame[0:6]; normal maps take their tangent frame from
+    these, not from a mesh's tangents)."""
+    ka, kd, ks, _, ke, shininess = material_coeffs_filtered(tex, mat, u, v, p, footprint[0], footprint[1],
+                                                            footprint[2], footprint[3])
     if mat[MAT_BUMP] >= 0.0:
         n = bump_normal_filtered(tex, mat, u, v, p, n, (frame[0], frame[1], frame[2]), (frame[3], frame[4], frame[5]),
                                  footprint[0], footprint[1], footprint[2], footprint[3])
-    return ka, kd, ks, ke, n
+    return ka, kd, ks, ke, shininess, n
 
 
 @njit_inline
@@ -175,7 +176,7 @@ def _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
             n = (normals[i, 0], normals[i, 1], normals[i, 2])
             mat = lit.materials[materials_of[i]]
             frame = frames[i if i < frames.shape[0] else 0]  # one row of zeros when the scene has no textures
-            ka, kd, ks, _, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frame, _NO_FOOTPRINT)
+            ka, kd, ks, _, shininess, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frame, _NO_FOOTPRINT)
             n_f = _facing(n, V)
             # one call of the (inlined) illumination model for both readings: flat lights the side the viewer
             # sees with the material's coefficients, Gouraud each side in turn with unit ones
@@ -188,7 +189,7 @@ def _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
                 else:
                     n_s, n_g = _facing(n_b, n_f), n_f
                     ca, cd, cs = ka, kd, ks
-                a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ca, cd, cs, mat[MAT_SHININESS],
+                a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ca, cd, cs, shininess,
                                                    seed, i, side, shadows, stack, stack_t, 0.0, out, -1)
                 count += extra
                 if gouraud:
@@ -225,6 +226,8 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
                 object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1, stack, stack_t):
     width = ids.shape[1]
     geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
+    env_pixels, env_info = sa.env_pixels, sa.env_info
+    env_lit = lit.ambient.shape[0] > AMBIENT_ROWS  # (an environment lights the model: `mirrored_environment`)
     for y in range(y0, y1):
         rays = 0
         amb = lit.ambient
@@ -246,6 +249,8 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
             textured = uv_at >= 0 and (mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0)
             ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
             ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
+            kr = (mat[MAT_KR], mat[MAT_KR + 1], mat[MAT_KR + 2])
+            shininess = mat[MAT_SHININESS]
             u = v = 0.0
             fp = _NO_FOOTPRINT
             if textured:  # (one lookup, inlined once, whatever the shading: the pixel's coefficients and emission)
@@ -253,7 +258,8 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
                     fp = _footprint(cam_vecs, ortho, pixel_size, p, fn, frames[prim])
                 u = np.float64(gbuf[y, x, uv_at])
                 v = np.float64(gbuf[y, x, uv_at + 1])
-                ka, kd, ks, _, ke = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2], fp[3])
+                ka, kd, ks, kr, ke, shininess = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2],
+                                                                         fp[3])
             if shading == FLAT:
                 n_sh = _facing(fn, V)
                 a = (prim_terms[prim, 0], prim_terms[prim, 1], prim_terms[prim, 2])
@@ -284,7 +290,7 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
                           ks[2] * np.float64(gbuf[y, x, c + 5]))
                 else:
                     a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_sh, _facing(fn, V), V, ka, kd, ks,
-                                                       mat[MAT_SHININESS], seed, y * width + x, sample, shadows,
+                                                       shininess, seed, y * width + x, sample, shadows,
                                                        stack, stack_t, 0.0, light_log,
                                                        0 if x == explain[0] and y == explain[1] else -1)
                     rays += extra
@@ -301,6 +307,12 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
                     terms[y, x, 3 + k] += weight * d[k]
                     terms[y, x, 6 + k] += weight * sp[k]
                     terms[y, x, 9 + k] += weight * e[k]
+            if env_lit:  # kr's mirror image of the environment, by the pixel's normal whatever the shading
+                m = mirrored_environment(amb, env_pixels, env_info, n_sh, V, kr)
+                for k in range(3):
+                    accum[y, x, k] += weight * m[k]
+                    if want_terms:
+                        terms[y, x, 12 + k] += weight * m[k]
             if aovs:
                 depth[y, x] = view_depth(cam_vecs, ortho, p)
                 normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_sh

@@ -18,28 +18,29 @@ from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms
 from ..kernels.jit import njit, njit_serial
-from ..kernels.environment import sky_radiance
-from ..kernels.layout import MAT_ONE_SIDED, MAT_SHININESS
+from ..kernels.environment import mirrored_environment, sky_radiance
+from ..kernels.layout import MAT_ONE_SIDED
 from ..kernels.surface import shading_side, surface_at
 from ..kernels.bump import material_in_cone
-from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
+from ..kernels.views import geometry_of, lighting_of, sky_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
 from .common import Film, finish, row_bands, run_bands, start
 
 
 @njit
-def shade_hit(surf, lit, tex, geo, o, d, cone, hit, seed, pixel, sample, shadows, stack, stack_t, per_light,
+def shade_hit(surf, lit, tex, geo, sky, o, d, cone, hit, seed, pixel, sample, shadows, stack, stack_t, per_light,
               log_base):
     """Radiance towards the eye from a primary hit; returns (rgb, n_shading, kd, object_id, shadow rays,
-    (ambient, diffuse, specular, emitted)); each light's share goes to `per_light` from row `log_base` (>= 0;
-    `illuminate_terms`). The textures are filtered over the footprint of the ray's cone (`cone`: width at o,
-    spread; `kernels.camera.camera_cone`)."""
+    (ambient, diffuse, specular, emitted, reflected)); each light's share goes to `per_light` from row `log_base`
+    (>= 0; `illuminate_terms`). The textures are filtered over the footprint of the ray's cone (`cone`: width at
+    o, spread; `kernels.camera.camera_cone`). Where an environment lights the model, `kr` reflects it (`sky`,
+    `views.sky_of`; `environment.mirrored_environment`)."""
     t, ref, b1, b2, part = hit
     p, n_geo, n_sh, u, v, mat_id, object_id, light_id = surface_at(surf, o, d, t, ref, b1, b2, part, 0.0)
     mat = lit.materials[mat_id]
     V = mul(d, -1.0)
     # the material's coefficients and the shading normal, textures and bump map filtered over the ray's cone
-    ka, kd, ks, kr, ke, n_sh = material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n_sh, u, v, d,
+    ka, kd, ks, kr, ke, shininess, n_sh = material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n_sh, u, v, d,
                                                 abs(cone[0] + cone[1] * t), 0.0)
     # emitted light: from the front only where the material says so (rect and disk lights, one-sided objects)
     emit = 1.0
@@ -48,12 +49,14 @@ def shade_hit(surf, lit, tex, geo, o, d, cone, hit, seed, pixel, sample, shadows
     # the shading normal on the viewer's side of the surface (DESIGN.md §3: two-sided surfaces)
     n_sh = shading_side(n_sh, n_geo, V)
     n_g = n_geo if dot(n_geo, V) >= 0.0 else mul(n_geo, -1.0)
-    a, dif, spec, rays = illuminate_terms(lit, geo, surf, p, n_sh, n_g, V, ka, kd, ks, mat[MAT_SHININESS], seed,
+    a, dif, spec, rays = illuminate_terms(lit, geo, surf, p, n_sh, n_g, V, ka, kd, ks, shininess, seed,
                                           pixel, sample, shadows, stack, stack_t, 0.0, per_light,
                                           log_base)
     e = (emit * ke[0], emit * ke[1], emit * ke[2])
-    rgb = (a[0] + dif[0] + spec[0] + e[0], a[1] + dif[1] + spec[1] + e[1], a[2] + dif[2] + spec[2] + e[2])
-    return rgb, n_sh, kd, object_id, rays, (a, dif, spec, e)
+    m = mirrored_environment(lit.ambient, sky[0], sky[1], n_sh, V, kr)
+    rgb = (a[0] + dif[0] + spec[0] + e[0] + m[0], a[1] + dif[1] + spec[1] + e[1] + m[1],
+           a[2] + dif[2] + spec[2] + e[2] + m[2])
+    return rgb, n_sh, kd, object_id, rays, (a, dif, spec, e, m)
 
 
 @njit_serial
@@ -72,9 +75,10 @@ def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, mi
     """One band of rows: `spp` camera rays per pixel, box-filtered; the first sample's depth, normal, albedo and
     object id in those (H, W) buffers, or nowhere when they are None (Numba compiles that case apart, without
     the stores: even an untaken branch to them costs a tenth of a render of a large mesh); with `want_terms`, the
-    mean of the samples' terms (ambient, diffuse, specular, emitted; reflected and transmitted stay 0) in
-    terms[y, x, :18]. At pixel `explain` (x, y), the first sample's per-light shares go to `light_log`
-    (`lumos.explain`). With `mipmap`, textures are filtered over each camera ray's cone (`camera_cone`)."""
+    mean of the samples' terms (ambient, diffuse, specular, emitted, reflected: the environment's mirror image;
+    transmitted stays 0) in terms[y, x, :18]. At pixel `explain` (x, y), the first sample's per-light shares go
+    to `light_log` (`lumos.explain`). With `mipmap`, textures are filtered over each camera ray's cone
+    (`camera_cone`)."""
     geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
     cone = camera_cone(cam_params, height, spp, mipmap)
     for y in range(y0, y1):
@@ -98,12 +102,12 @@ def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, mi
                             terms[y, x, 9 + k] += inv * bg[k]
                     continue
                 logged = x == explain[0] and y == explain[1] and s == 0
-                rgb, n_sh, kd, obj, extra, parts = shade_hit(surf, lit, tex, geo, o, d, cone, hit, seed, pixel, s,
-                                                             False, stack, stack_t, light_log,
+                rgb, n_sh, kd, obj, extra, parts = shade_hit(surf, lit, tex, geo, sky_of(sa), o, d, cone, hit, seed,
+                                                             pixel, s, False, stack, stack_t, light_log,
                                                              0 if logged else -1)
                 rays += extra
                 if want_terms:
-                    for j in range(4):
+                    for j in range(5):
                         for k in range(3):
                             terms[y, x, 3 * j + k] += inv * parts[j][k]
                 r += rgb[0]

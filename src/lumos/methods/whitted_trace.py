@@ -14,7 +14,7 @@ from ..kernels.cutout import closest_visible_hit
 from ..kernels.environment import sky_radiance
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
 from ..kernels.jit import njit, njit_alloc, njit_inline
-from ..kernels.layout import MAT_FRESNEL, MAT_IOR, MAT_KT, MAT_ONE_SIDED, MAT_SHININESS
+from ..kernels.layout import MAT_FRESNEL, MAT_IOR, MAT_KT, MAT_ONE_SIDED
 from ..kernels.optics import reflect, refract, schlick
 from ..kernels.rng import rand01
 from ..kernels.surface import curvature_seen, offset_origin, shading_side, surface_at
@@ -215,15 +215,15 @@ def _shade(geo, surf, lit, tex, ro, rd, hit, width, time, seed, pixel, sample, s
     V = (-rd[0], -rd[1], -rd[2])
     entering = n_geo[0] * rd[0] + n_geo[1] * rd[1] + n_geo[2] * rd[2] < 0.0
     # the material's coefficients and the shading normal, textures and bump map filtered over the ray's cone
-    ka, kd, ks, kr, ke, n_sh = material_in_cone(surf, tex, mat, ref, hit[4], hit[2], hit[3], p, n_geo, n_sh, u, v,
-                                                rd, abs(width), time)
+    ka, kd, ks, kr, ke, shininess, n_sh = material_in_cone(surf, tex, mat, ref, hit[4], hit[2], hit[3], p, n_geo,
+                                                           n_sh, u, v, rd, abs(width), time)
     n_s = shading_side(n_sh, n_geo, V)
     n_g = n_geo if entering else (-n_geo[0], -n_geo[1], -n_geo[2])
     e = (0.0, 0.0, 0.0)
     if mat[MAT_ONE_SIDED] == 0.0 or entering:  # a one-sided emitter (rect and disk lights): its front only
         e = ke
     kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
-    la, ld, ls, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, mat[MAT_SHININESS],
+    la, ld, ls, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, shininess,
                                          seed, pixel, sample, True, stack, stack_t, time, light_log, light_at)
     sent = (e[0] + la[0] + ld[0] + ls[0], e[1] + la[1] + ld[1] + ls[1], e[2] + la[2] + ld[2] + ls[2])
     if row >= 0:

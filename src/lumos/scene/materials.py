@@ -92,16 +92,18 @@ class Conductor(_GGXWidths):
         return tuple(t * ((e - 1.0) ** 2 + k * k) / ((e + 1.0) ** 2 + k * k)
                      for t, e, k in zip(self.tint, *index))
 
-    def classic(self) -> dict:
+    def classic(self, environment_lit: bool = False) -> dict:
         """The classic coefficients the local methods (raycast, whitted, raster) read for this metal: its head-on
         reflectance F0 as the mirror `kr` (α below 0.01) or as a Phong lobe `ks` whose exponent matches the GGX
-        width (`phong_exponent`), and as `ka`; no diffuse light."""
+        width (`phong_exponent`), and as `ka` (the surroundings it reflects, as ambient light) unless an
+        environment lights the model, whose reflection the local methods then show; no diffuse light."""
         f0 = self.normal_reflectance()
         alpha = 0.5 * sum(self.alphas)
         zero = (0.0, 0.0, 0.0)
+        ka = zero if environment_lit else f0
         if alpha < 0.01:
-            return {"ka": f0, "kd": zero, "ks": zero, "kr": f0, "shininess": 1.0}
-        return {"ka": f0, "kd": zero, "ks": f0, "kr": zero, "shininess": phong_exponent(alpha)}
+            return {"ka": ka, "kd": zero, "ks": zero, "kr": f0, "shininess": 1.0}
+        return {"ka": ka, "kd": zero, "ks": f0, "kr": zero, "shininess": phong_exponent(alpha)}
 
 
 class Plastic(StrictModel):
@@ -122,7 +124,7 @@ class Plastic(StrictModel):
             raise ValueError("ior must differ from 1 (a coat of index 1 is no coat)")
         return self
 
-    def classic(self) -> dict:
+    def classic(self, environment_lit: bool = False) -> dict:
         """What the local methods read for the coat: its head-on reflectance ((η−1)/(η+1))² as a mirror `kr`
         (α below 0.01) or as a Phong lobe `ks` as wide as the GGX one."""
         f0 = tuple(t * ((self.ior - 1.0) / (self.ior + 1.0)) ** 2 for t in self.tint)
@@ -156,7 +158,7 @@ class Dielectric(_GGXWidths):
         """The relative index inside over outside."""
         return self.ior / self.ext_ior
 
-    def classic(self) -> dict:
+    def classic(self, environment_lit: bool = False) -> dict:
         """What the local methods read for this glass: `kt` = transmit_tint, `ior` = ior/ext_ior (they assume
         the outside is the medium the ray comes from) with `fresnel: true` (Schlick's reflection and refraction),
         and for a rough one (α at least 0.01) a Phong highlight `ks` of the head-on reflectance ((η−1)/(η+1))²
@@ -197,12 +199,13 @@ class Principled(StrictModel):
         base = ((self.ior - 1.0) / (self.ior + 1.0)) ** 2
         return tuple(min(base * c, 1.0) * self.specular for c in self.specular_color)
 
-    def classic(self) -> dict:
+    def classic(self, environment_lit: bool = False) -> dict:
         """The classic coefficients the local methods read (docs/formats.md#gltf-20), with g = (1 − r)² the share
         of the specular reflection that is a sharp mirror and F0s = F0·(1 − m) + b·m its colour:
-        kd = b·(1 − m)·(1 − F0)·(1 − t), kt = b·(1 − m)·(1 − F0)·t, ks = F0s·(1 − g), kr = F0s·g, ka = kd + F0s,
-        and the Phong exponent of the GGX width r² (`phong_exponent`), so kd + ks + kr + kt <= 1; a clear coat
-        takes 0.04·c off all of them and adds it to kr (its roughness below 0.5) or ks."""
+        kd = b·(1 − m)·(1 − F0)·(1 − t), kt = b·(1 − m)·(1 − F0)·t, ks = F0s·(1 − g), kr = F0s·g, ka = kd + F0s
+        (kd alone where an environment lights the model: the local methods then show its reflection), and the
+        Phong exponent of the GGX width r² (`phong_exponent`), so kd + ks + kr + kt <= 1; a clear coat takes
+        0.04·c off all of them and adds it to kr (its roughness below 0.5) or ks."""
         import numpy as np
 
         b, m, t = np.asarray(self.base_color, dtype=float), self.metallic, self.transmission
@@ -214,7 +217,7 @@ class Principled(StrictModel):
         kd = b * dielectric * (1.0 - t)
         coat = 0.04 * self.clearcoat  # and reflects it: a mirror when smooth (roughness below 0.5), else a highlight
         smooth = self.clearcoat_roughness < 0.5
-        out = {"ka": kd + specular + coat, "kd": kd, "ks": specular * (1.0 - g) + (0.0 if smooth else coat),
+        out = {"ka": kd if environment_lit else kd + specular + coat, "kd": kd, "ks": specular * (1.0 - g) + (0.0 if smooth else coat),
                "kr": specular * g + (coat if smooth else 0.0), "shininess": phong_exponent(self.roughness ** 2)}
         if t > 0.0:
             out.update(kt=b * dielectric * t, ior=self.ior, fresnel=True)
@@ -270,12 +273,14 @@ class Material(StrictModel):
                 raise ValueError(f"a texture applied to {' and '.join(sorted(reads))} needs a principled material")
         return self
 
-    def classic(self) -> dict:
+    def classic(self, environment_lit: bool = False) -> dict:
         """The classic coefficients the local methods (and radiosity) read: ka, kd, ks, shininess, kr, kt, ior
-        and fresnel as given, and where not given the physical model's classic reading (its `classic()`)."""
+        and fresnel as given, and where not given the physical model's classic reading (its `classic()`;
+        `environment_lit`: an environment lights the local model, `compile.environment_lights_model`)."""
         out = {k: getattr(self, k) for k in ("ka", "kd", "ks", "shininess", "kr", "kt", "ior", "fresnel")}
         if self.physical is not None:
-            out.update({k: v for k, v in self.physical.classic().items() if k not in self.model_fields_set})
+            out.update({k: v for k, v in self.physical.classic(environment_lit).items()
+                        if k not in self.model_fields_set})
         return out
 
     @property
