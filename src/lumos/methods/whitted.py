@@ -35,7 +35,7 @@ from ..kernels.camera import camera_cone, camera_ray
 from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
 from ..errors import LumosError
 from ..kernels.views import geometry_of, lighting_of, owned_views, sky_of, surfaces_of, textures_of
-from .adaptive import adaptive_pixel, adaptive_rows, aov_rows, corner_rows
+from .adaptive import adaptive_pixel, adaptive_rows, aov_rows
 from .common import SURFACE_AOVS, TERM_CHANNELS, Film, finish, row_bands, run_bands, start
 from .whitted_trace import LOG_DEPTH, LOG_FX, LOG_FY, point_radiance, shutter_time, store_aovs, trace, trace_scratch
 
@@ -149,7 +149,8 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
     stack = np.empty((4 * max_level + 4, 4), np.int64)
     weights = np.zeros((n, n))
     adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth, cone,
-                   threshold, max_level, corners, scratch, sky, grid, stamp, stack, weights, value)
+                   threshold, max_level, corners, scratch, sky, grid, stamp, stack, weights, value,
+                   np.empty((5, 2), np.int64), False)
     for row in range(start, log_n[0]):
         if log[row, LOG_DEPTH] == 0.0:
             gx = np.int64(np.round((log[row, LOG_FX] - x) * cells))
@@ -186,14 +187,15 @@ def render_whitted(compiled, camera, settings, progress=None, rows=None) -> Film
         corners = np.zeros((height + 1, width + 1, 3 + TERM_CHANNELS if b.want_terms else 3))
         corner_rays = np.zeros(height + 1, np.int64)
         half = None if progress is None else (lambda f: progress(0.5 * f))
-        run_bands(lambda r0, r1: corner_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                             seed, max_depth, mipmap, corners, corner_rays), height + 1, half,
+        threshold, max_level = float(settings.adaptive_threshold), np.int64(settings.adaptive_depth)
+        run_bands(lambda r0, r1: adaptive_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
+                                               seed, max_depth, mipmap, threshold, max_level, corners, b.radiance,
+                                               samples, b.terms, corner_rays, True), height + 1, half,
                   row_bands(height + 1, rows=(y_lo, y_hi + 1)))
         rest = None if progress is None else (lambda f: progress(0.5 + 0.5 * f))
         run_bands(lambda r0, r1: adaptive_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                               seed, max_depth, mipmap, float(settings.adaptive_threshold),
-                                               np.int64(settings.adaptive_depth), corners, b.radiance, samples,
-                                               b.terms, b.rays_per_row), height, rest, bands)
+                                               seed, max_depth, mipmap, threshold, max_level, corners, b.radiance,
+                                               samples, b.terms, b.rays_per_row, False), height, rest, bands)
         if set(settings.aov) & set(SURFACE_AOVS):
             run_bands(lambda r0, r1: aov_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
                                               seed, max_depth, mipmap, b.depth, b.normal, b.albedo, b.object_id,
