@@ -39,7 +39,8 @@ from ..kernels.bump import bump_normal_filtered
 from ..kernels.texture import TEX_SIZE, material_coeffs_filtered
 from ..kernels.threads import parallel_for
 from ..kernels.views import geometry_of, lighting_of, surfaces_of, textures_of
-from .common import Film, allocate_aovs, background_image, check_memory, finish, set_threads, start
+from .common import (TERM_CHANNELS, Film, allocate_aovs, background_image, check_memory, finish, set_threads,
+                     start)
 
 FLAT, GOURAUD, PHONG = 0, 1, 2
 _SHADING = {"flat": FLAT, "gouraud": GOURAUD, "phong": PHONG}
@@ -143,12 +144,20 @@ _NO_FOOTPRINT = (0.0, 0.0, 0.0, 0.0)
 #: The texture view of a pass without opacity cut-outs (never read: the same types as a scene's, one compilation).
 _NO_TEXTURES = Textures(np.zeros((0, TEX_SIZE)), np.zeros((0, 3), np.float32), np.zeros((0, 12), np.float32))
 _NO_PIXEL = np.array([-1, -1], np.int64)
+#: The pixel stage's buffers in a vertex stage call of `_shade` (never read: the same types as a pass's, one
+#: compilation): bg, ids, gbuf, prim_info, prim_normal, accum, depth, normal, albedo, object_id, terms, light_log.
+_NO_PIXEL_BUFFERS = (np.zeros((1, 1, 3)), np.full((1, 1), -1, np.int32), np.zeros((1, 1, 1), np.float32),
+                     np.zeros((1, 3), np.int32), np.zeros((1, 3)), np.zeros((1, 1, 3), np.float32),
+                     *allocate_aovs(1, 1), np.zeros((1, 1, TERM_CHANNELS), np.float32),
+                     np.zeros((0, PER_LIGHT_SIZE)))
+#: The vertex stage's inputs in a pixel pass (points, normals, uvs, materials_of).
+_NO_POINTS = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(0, np.int32))
 
 
-@njit_serial
-def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out,
-                  rays, c0, c1):
-    """The vertex (or polygon) stage of the illumination model.
+def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out, rays,
+                  c0, c1):
+    """The vertex (or polygon) stage of the illumination model, run by the shading kernel (`_shade`, its
+    `vertex_stage`: one kernel, one inlined copy of the model and of the texture lookups to compile).
 
     Flat (`gouraud` False): at each polygon's centroid, with its face normal turned to the viewer and its
     material's coefficients at the centroid's (u, v) (bumped by its bump map), out[i] = (ambient, diffuse,
@@ -157,143 +166,160 @@ def _light_points(sa, points, normals, uvs, frames, materials_of, cam_vecs, orth
     the side the normal points to, then on the other side, 12 values: which side the viewer sees is known per
     pixel, from the polygon's face normal. Chunks c0 … c1−1 of _CHUNK points; rays[c]: the shadow rays of
     chunk c."""
-    _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out, rays,
-                  c0, c1, np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
-
-
-@njit
-def _light_chunks(sa, points, normals, uvs, frames, materials_of, cam_vecs, ortho, seed, shadows, gouraud, out,
-                  rays, c0, c1, stack, stack_t):
-    n_points = points.shape[0]
-    one = (1.0, 1.0, 1.0)
-    zero = (0.0, 0.0, 0.0)
-    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-    for c in range(c0, c1):
-        count = 0
-        for i in range(c * _CHUNK, min(n_points, (c + 1) * _CHUNK)):
-            p = (points[i, 0], points[i, 1], points[i, 2])
-            V = _toward_eye(p, cam_vecs, ortho)
-            n = (normals[i, 0], normals[i, 1], normals[i, 2])
-            mat = lit.materials[materials_of[i]]
-            frame = frames[i if i < frames.shape[0] else 0]  # one row of zeros when the scene has no textures
-            ka, kd, ks, _, shininess, n_b = _surface_at(tex, mat, p, n, uvs[i, 0], uvs[i, 1], frame, _NO_FOOTPRINT)
-            n_f = _facing(n, V)
-            # one call of the (inlined) illumination model for both readings: flat lights the side the viewer
-            # sees with the material's coefficients, Gouraud each side in turn with unit ones
-            for side in range(2 if gouraud else 1):
-                if gouraud:
-                    sgn = 1.0 if side == 0 else -1.0
-                    n_s = (sgn * n_b[0], sgn * n_b[1], sgn * n_b[2])
-                    n_g = (sgn * n[0], sgn * n[1], sgn * n[2])
-                    ca, cd, cs = zero, one, one
-                else:
-                    n_s, n_g = _facing(n_b, n_f), n_f
-                    ca, cd, cs = ka, kd, ks
-                a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ca, cd, cs, shininess,
-                                                   seed, i, side, shadows, stack, stack_t, 0.0, out, -1)
-                count += extra
-                if gouraud:
-                    for k in range(3):
-                        out[i, 6 * side + k] = d[k]
-                        out[i, 6 * side + 3 + k] = sp[k]
-                else:
-                    for k in range(3):
-                        out[i, k] = a[k]
-                        out[i, 3 + k] = d[k]
-                        out[i, 6 + k] = sp[k]
-                        out[i, 9 + k] = kd[k]
-        rays[c] = count
+    no = _NO_PIXEL_BUFFERS
+    _shade(sa, no[0], no[1], no[2], np.int64(-1), np.int64(0), no[3], no[4], out, frames, cam_vecs, ortho, 0.0,
+           np.int64(GOURAUD if gouraud else FLAT), False, seed, np.int64(0), shadows, 0.0, no[5], False, no[6], no[7],
+           no[8], no[9], no[10], False, rays, _NO_PIXEL, no[11], np.int64(c0), np.int64(c1),
+           np.ascontiguousarray(points, np.float64), np.ascontiguousarray(normals, np.float64),
+           np.ascontiguousarray(uvs, np.float64), np.ascontiguousarray(materials_of, np.int32), True)
 
 
 @njit_serial
 def _shade(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
            pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
-           object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1):
+           object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1, points, normals, uvs,
+           materials_of, vertex_stage):
     """One shading pass over the G-buffer: adds weight × each pixel's radiance to `accum` (float32) and, with
     `want_terms`, weight × its ambient, diffuse, specular and emitted terms to terms[..., 0:12]; with `aovs` set
     (the first pass, when any is asked for) it also fills the AOV buffers. At pixel `explain` (x, y; (−1, −1)
-    for none) Phong shading records each light's share in `light_log` (`lumos.explain`). `uv_at` is the G-buffer channel of
-    (u, v) (−1: the scene has no textures), `light_at` that of Gouraud's interpolated light. Rows y0 … y1−1."""
+    for none) Phong shading records each light's share in `light_log` (`lumos.explain`). `uv_at` is the G-buffer
+    channel of (u, v) (−1: the scene has no textures), `light_at` that of Gouraud's interpolated light. Rows
+    y0 … y1−1.
+
+    With `vertex_stage`, instead the vertex (Gouraud) or polygon (flat) stage of `_light_points` over chunks
+    y0 … y1−1 of `points` (with their `normals`, `uvs`, `frames` and `materials_of`), into `prim_terms` and
+    `rays_per_row` (one count per chunk): the same kernel, so that the illumination model, the texture lookup
+    and the bump map are each compiled once for raster (one call site each, below)."""
     _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
                 pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
-                object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1,
-                np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
+                object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1, points, normals, uvs,
+                materials_of, vertex_stage, np.empty(config.BVH_STACK, np.int64), np.empty(config.BVH_STACK))
 
 
 @njit
 def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim_terms, frames, cam_vecs, ortho,
                 pixel_size, shading, mipmap, seed, sample, shadows, weight, accum, aovs, depth, normal, albedo,
-                object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1, stack, stack_t):
+                object_id, terms, want_terms, rays_per_row, explain, light_log, y0, y1, points, normals, uvs,
+                materials_of, vertex_stage, stack, stack_t):
     width = ids.shape[1]
     geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
     env_pixels, env_info = sa.env_pixels, sa.env_info
     env_lit = lit.ambient.shape[0] > AMBIENT_ROWS  # (an environment lights the model: `mirrored_environment`)
-    for y in range(y0, y1):
+    amb = lit.ambient
+    gouraud = shading == GOURAUD
+    one = (1.0, 1.0, 1.0)
+    zero = (0.0, 0.0, 0.0)
+    for y in range(y0, y1):  # rows of pixels; in the vertex stage, chunks of _CHUNK points
         rays = 0
-        amb = lit.ambient
-        for x in range(width):
-            prim = ids[y, x]
-            if prim < 0:
-                for k in range(3):
-                    accum[y, x, k] += weight * bg[y, x, k]
-                    if want_terms:
-                        terms[y, x, 9 + k] += weight * bg[y, x, k]
-                continue
-            mat_id = prim_info[prim, 0]
-            mat = lit.materials[mat_id]
-            p = (np.float64(gbuf[y, x, G_POS]), np.float64(gbuf[y, x, G_POS + 1]), np.float64(gbuf[y, x, G_POS + 2]))
-            V = _toward_eye(p, cam_vecs, ortho)
-            fn = (prim_normal[prim, 0], prim_normal[prim, 1], prim_normal[prim, 2])
-            kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
-            ke = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
-            textured = uv_at >= 0 and (mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0)
-            ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
-            ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
-            kr = (mat[MAT_KR], mat[MAT_KR + 1], mat[MAT_KR + 2])
-            shininess = mat[MAT_SHININESS]
+        i0, i1 = (y * _CHUNK, min(points.shape[0], (y + 1) * _CHUNK)) if vertex_stage else (0, width)
+        for x in range(i0, i1):
+            # the shading point: a vertex (or centroid), or the pixel's nearest polygon in the G-buffer
+            prim = -1
             u = v = 0.0
             fp = _NO_FOOTPRINT
-            if textured:  # (one lookup, inlined once, whatever the shading: the pixel's coefficients and emission)
-                if mipmap:
-                    fp = _footprint(cam_vecs, ortho, pixel_size, p, fn, frames[prim])
-                u = np.float64(gbuf[y, x, uv_at])
-                v = np.float64(gbuf[y, x, uv_at + 1])
+            if vertex_stage:
+                p = (points[x, 0], points[x, 1], points[x, 2])
+                V = _toward_eye(p, cam_vecs, ortho)
+                n_raw = (normals[x, 0], normals[x, 1], normals[x, 2])
+                fn = n_raw
+                mat = lit.materials[materials_of[x]]
+                frame = frames[x if x < frames.shape[0] else 0]  # one row of zeros when the scene has no textures
+                u, v = uvs[x, 0], uvs[x, 1]
+                textured = True  # (read the material's textures and bump map wherever it has them)
+                n_in = n_raw
+            else:
+                prim = ids[y, x]
+                if prim < 0:
+                    for k in range(3):
+                        accum[y, x, k] += weight * bg[y, x, k]
+                        if want_terms:
+                            terms[y, x, 9 + k] += weight * bg[y, x, k]
+                    continue
+                mat = lit.materials[prim_info[prim, 0]]
+                p = (np.float64(gbuf[y, x, G_POS]), np.float64(gbuf[y, x, G_POS + 1]),
+                     np.float64(gbuf[y, x, G_POS + 2]))
+                V = _toward_eye(p, cam_vecs, ortho)
+                fn = (prim_normal[prim, 0], prim_normal[prim, 1], prim_normal[prim, 2])
+                n_raw = fn
+                frame = frames[prim if prim < frames.shape[0] else 0]
+                textured = uv_at >= 0 and (mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0)
+                if textured:
+                    if mipmap:
+                        fp = _footprint(cam_vecs, ortho, pixel_size, p, fn, frame)
+                    u = np.float64(gbuf[y, x, uv_at])
+                    v = np.float64(gbuf[y, x, uv_at + 1])
+                n_in = fn
+                if shading != FLAT:
+                    n_in = _facing((np.float64(gbuf[y, x, G_NORMAL]), np.float64(gbuf[y, x, G_NORMAL + 1]),
+                                    np.float64(gbuf[y, x, G_NORMAL + 2])), fn)  # unit, on the face normal's side
+                    if n_in[0] == 0.0 and n_in[1] == 0.0 and n_in[2] == 0.0:
+                        n_in = fn
+            # the material there (one texture lookup, inlined once, whatever the stage and shading) and its bump
+            ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
+            kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
+            ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
+            kr = (mat[MAT_KR], mat[MAT_KR + 1], mat[MAT_KR + 2])
+            ke = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
+            shininess = mat[MAT_SHININESS]
+            if textured:
                 ka, kd, ks, kr, ke, shininess = material_coeffs_filtered(tex, mat, u, v, p, fp[0], fp[1], fp[2],
                                                                          fp[3])
+                # bump maps tilt the normal at the vertices (Gouraud, flat's centroid) or per pixel (Phong)
+                if mat[MAT_BUMP] >= 0.0 and (vertex_stage or shading == PHONG):
+                    n_in = bump_normal_filtered(tex, mat, u, v, p, n_in, (frame[0], frame[1], frame[2]),
+                                                (frame[3], frame[4], frame[5]), fp[0], fp[1], fp[2], fp[3])
+            n_sh = _facing(fn, V) if shading == FLAT and not vertex_stage else shading_side(n_in, fn, V)
+            # the illumination model: at each side of a vertex (Gouraud, unit coefficients), at a centroid
+            # (flat), or at a pixel (Phong); one call of it, inlined once
+            a = d = sp = zero
+            sides = (2 if gouraud else 1) if vertex_stage else (1 if shading == PHONG else 0)
+            for side in range(sides):
+                if vertex_stage:
+                    if gouraud:
+                        sgn = 1.0 if side == 0 else -1.0
+                        n_s = (sgn * n_in[0], sgn * n_in[1], sgn * n_in[2])
+                        n_g = (sgn * n_raw[0], sgn * n_raw[1], sgn * n_raw[2])
+                        ca, cd, cs = zero, one, one
+                    else:
+                        n_g = _facing(n_raw, V)
+                        n_s, ca, cd, cs = _facing(n_in, n_g), ka, kd, ks
+                    key, smp, log, log_row = np.int64(x), np.int64(side), prim_terms, -1
+                else:
+                    n_s, n_g, ca, cd, cs = n_sh, _facing(fn, V), ka, kd, ks
+                    key, smp, log = y * width + x, sample, light_log
+                    log_row = 0 if x == explain[0] and y == explain[1] else -1
+                a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ca, cd, cs, shininess, seed, key,
+                                                   smp, shadows, stack, stack_t, 0.0, log, log_row)
+                rays += extra
+                if vertex_stage:
+                    for k in range(3):
+                        if gouraud:
+                            prim_terms[x, 6 * side + k] = d[k]
+                            prim_terms[x, 6 * side + 3 + k] = sp[k]
+                        else:
+                            prim_terms[x, k] = a[k]
+                            prim_terms[x, 3 + k] = d[k]
+                            prim_terms[x, 6 + k] = sp[k]
+                            prim_terms[x, 9 + k] = kd[k]
+            if vertex_stage:
+                continue
             if shading == FLAT:
-                n_sh = _facing(fn, V)
                 a = (prim_terms[prim, 0], prim_terms[prim, 1], prim_terms[prim, 2])
                 d = (prim_terms[prim, 3], prim_terms[prim, 4], prim_terms[prim, 5])
                 sp = (prim_terms[prim, 6], prim_terms[prim, 7], prim_terms[prim, 8])
                 kd = (prim_terms[prim, 9], prim_terms[prim, 10], prim_terms[prim, 11])  # at the centroid
-            else:
-                n_in = _facing((np.float64(gbuf[y, x, G_NORMAL]), np.float64(gbuf[y, x, G_NORMAL + 1]),
-                                np.float64(gbuf[y, x, G_NORMAL + 2])), fn)  # unit, on the face normal's side
-                if n_in[0] == 0.0 and n_in[1] == 0.0 and n_in[2] == 0.0:
-                    n_in = fn
-                if textured and shading == PHONG and mat[MAT_BUMP] >= 0.0:  # (Gouraud's were at the vertices)
-                    frame = frames[prim]
-                    n_in = bump_normal_filtered(tex, mat, u, v, p, n_in, (frame[0], frame[1], frame[2]),
-                                                (frame[3], frame[4], frame[5]), fp[0], fp[1], fp[2], fp[3])
-                n_sh = shading_side(n_in, fn, V)
-                if shading == GOURAUD:
-                    # the light on the side the viewer sees: the vertex normals' own side or the other one
-                    raw = (gbuf[y, x, G_NORMAL] * fn[0] + gbuf[y, x, G_NORMAL + 1] * fn[1]
-                           + gbuf[y, x, G_NORMAL + 2] * fn[2])
-                    back = (fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] < 0.0) != (raw < 0.0)
-                    c = light_at + 6 if back else light_at
-                    ia = ambient_light(amb, n_sh)
-                    a = (ka[0] * ia[0], ka[1] * ia[1], ka[2] * ia[2])
-                    d = (kd[0] * np.float64(gbuf[y, x, c]), kd[1] * np.float64(gbuf[y, x, c + 1]),
-                         kd[2] * np.float64(gbuf[y, x, c + 2]))
-                    sp = (ks[0] * np.float64(gbuf[y, x, c + 3]), ks[1] * np.float64(gbuf[y, x, c + 4]),
-                          ks[2] * np.float64(gbuf[y, x, c + 5]))
-                else:
-                    a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_sh, _facing(fn, V), V, ka, kd, ks,
-                                                       shininess, seed, y * width + x, sample, shadows,
-                                                       stack, stack_t, 0.0, light_log,
-                                                       0 if x == explain[0] and y == explain[1] else -1)
-                    rays += extra
+            elif gouraud:
+                # the light on the side the viewer sees: the vertex normals' own side or the other one
+                raw = (gbuf[y, x, G_NORMAL] * fn[0] + gbuf[y, x, G_NORMAL + 1] * fn[1]
+                       + gbuf[y, x, G_NORMAL + 2] * fn[2])
+                back = (fn[0] * V[0] + fn[1] * V[1] + fn[2] * V[2] < 0.0) != (raw < 0.0)
+                c = light_at + 6 if back else light_at
+                ia = ambient_light(amb, n_sh)
+                a = (ka[0] * ia[0], ka[1] * ia[1], ka[2] * ia[2])
+                d = (kd[0] * np.float64(gbuf[y, x, c]), kd[1] * np.float64(gbuf[y, x, c + 1]),
+                     kd[2] * np.float64(gbuf[y, x, c + 2]))
+                sp = (ks[0] * np.float64(gbuf[y, x, c + 3]), ks[1] * np.float64(gbuf[y, x, c + 4]),
+                      ks[2] * np.float64(gbuf[y, x, c + 5]))
             # emitted light (flat shading too takes it per pixel): one-sided emitters (rect and disk lights,
             # one-sided objects) on their front only
             e = (0.0, 0.0, 0.0)
@@ -477,7 +503,8 @@ class RasterFrame:
                                            self.cam_vecs, self.ortho, self.pixel_size, np.int64(self.shading),
                                            bool(self.settings.mipmap), self.seed, np.int64(s), self.shadows, weight,
                                            radiance, want_aovs, depth, normal, albedo, object_id, terms, want_terms,
-                                           rays_per_row, explain, log, np.int64(y0), np.int64(y1)),
+                                           rays_per_row, explain, log, np.int64(y0), np.int64(y1), *_NO_POINTS,
+                                           False),
                      0, ids.shape[0])
         return zbuf, ids, gbuf
 
