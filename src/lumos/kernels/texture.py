@@ -392,8 +392,10 @@ def noise01(s, t, period_s, period_t):
 def material_coeffs(tex, mat, u, v, p):
     """(ka, kd, ks, kr, emission, shininess), the first five RGB tuples: the material row's coefficients with its
     textures applied at (u, v) in list order, each replacing or multiplying the coefficients of its apply_to mask,
-    and its Phong exponent. No textures: the row's own values."""
-    return material_coeffs_filtered(tex, mat, u, v, p, 0.0, 0.0, 0.0, 0.0)
+    and its Phong exponent. No textures: the row's own values. For the path tracer, which reads a principled
+    material through `principled.principled_at` (its emission from here): no classic reading of it per point
+    (`material_coeffs_filtered`)."""
+    return _classic_coeffs(tex, mat, u, v, p, 0.0, 0.0, 0.0, 0.0)
 
 
 @njit_inline
@@ -408,6 +410,14 @@ def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
     """`material_coeffs` with the textures filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy); a zero
     footprint is the point lookup. A textured principled material's coefficients and exponent follow its base
     colour, metallic and roughness at the point (`principled_coeffs_filtered`)."""
+    if mat[MAT_MODEL] == MODEL_PRINCIPLED and mat[MAT_TEXTURE] >= 0.0:
+        return principled_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy)
+    return _classic_coeffs(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy)
+
+
+@njit_inline
+def _classic_coeffs(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
+    """The row's coefficients with its textures applied in list order, filtered over the footprint."""
     ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
     kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
     ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
@@ -416,8 +426,6 @@ def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
     first = np.int64(mat[MAT_TEXTURE])
     if first < 0:
         return ka, kd, ks, kr, ke, mat[MAT_SHININESS]
-    if mat[MAT_MODEL] == MODEL_PRINCIPLED:
-        return principled_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy)
     for row in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
         mask = np.int64(tex.tex_info[row, TEX_APPLY])
         if (mask & APPLY_COEFFS) == 0:
