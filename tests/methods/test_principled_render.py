@@ -42,17 +42,23 @@ def png(path, rgb):
     return str(path)
 
 
-def test_textures_multiply_the_factors_per_hit(tmp_path):
-    """A metallic–roughness map of blue 0 and green 255 turns a metal of roughness 0.6 into the dielectric of
-    roughness 0.6 (raw texels: 255 is 1, no sRGB curve), and a base colour map multiplies the base colour by its
-    decoded texels."""
+def maps_and_their_factors(tmp_path):
+    """(a metal of roughness 0.6 whose metallic–roughness map, blue 0 and green 255, says dielectric of roughness
+    0.6 (raw texels: 255 is 1, no sRGB curve), under a base colour map; the plain dielectric of the decoded
+    colour)."""
     mr = png(tmp_path / "mr.png", (0, 255, 0))
     base = png(tmp_path / "base.png", (200, 120, 90))
     textured = {"principled": {"metallic": 1.0, "roughness": 0.6},
                 "texture": [{"type": "image", "file": base, "apply_to": ["base_color"], "mode": "multiply"},
                             {"type": "image", "file": mr, "apply_to": ["metallic_roughness"]}]}
     decoded = srgb_decode(np.array([200, 120, 90]) / 255.0).astype(np.float32).astype(np.float64)
-    plain = {"principled": {"base_color": decoded.tolist(), "metallic": 0.0, "roughness": 0.6}}
+    return textured, {"principled": {"base_color": decoded.tolist(), "metallic": 0.0, "roughness": 0.6}}
+
+
+def test_textures_multiply_the_factors_per_hit(tmp_path):
+    """A metallic–roughness map of blue 0 and green 255 turns a metal of roughness 0.6 into the dielectric of
+    roughness 0.6, and a base colour map multiplies the base colour by its decoded texels."""
+    textured, plain = maps_and_their_factors(tmp_path)
     np.testing.assert_allclose(path(textured), path(plain), rtol=1e-5, atol=1e-6)
     assert not np.allclose(path(textured), path({"principled": {"metallic": 1.0, "roughness": 0.6}}), rtol=0.05)
 
@@ -118,13 +124,7 @@ def test_the_local_methods_read_the_maps_per_point(tmp_path, method):
     """The local methods' classic reading follows the maps too: a metal of roughness 0.6 whose metallic–roughness
     map says dielectric, under a base colour map, shows what the plain dielectric of that colour shows (the
     classic reading of the metal alone differs: all of its reflection is specular)."""
-    mr = png(tmp_path / "mr.png", (0, 255, 0))
-    base = png(tmp_path / "base.png", (200, 120, 90))
-    textured = {"principled": {"metallic": 1.0, "roughness": 0.6},
-                "texture": [{"type": "image", "file": base, "apply_to": ["base_color"], "mode": "multiply"},
-                            {"type": "image", "file": mr, "apply_to": ["metallic_roughness"]}]}
-    decoded = srgb_decode(np.array([200, 120, 90]) / 255.0).astype(np.float32).astype(np.float64)
-    plain = {"principled": {"base_color": decoded.tolist(), "metallic": 0.0, "roughness": 0.6}}
+    textured, plain = maps_and_their_factors(tmp_path)
     metal = {"principled": {"metallic": 1.0, "roughness": 0.6}}
     for env in (None, (1.0, 1.0, 1.0)):  # (without an environment ka also holds the reflection)
         images = []

@@ -62,6 +62,19 @@ def _pixel(info, d):
     return min(np.int64(v * h), h - 1), min(max(np.int64(u * w), 0), w - 1), sin_t
 
 
+@njit_inline
+def _bilinear_stencil(u, v, w, h):
+    """The four texels around lat-long point (u, v) of a w × h image and their bilinear weights: (row i, row i1,
+    column j0, column j1, w00, w01, w10, w11), between texel centres, around the seam in u, held at the poles in v."""
+    x = u * w - 0.5
+    y = min(max(v * h - 0.5, 0.0), h - 1.0)
+    j = np.int64(math.floor(x))
+    i = min(np.int64(y), h - 2) if h > 1 else 0
+    fx, fy = x - j, y - i
+    w00, w01 = (1.0 - fy) * (1.0 - fx), (1.0 - fy) * fx
+    return i, min(i + 1, h - 1), j % w, (j + 1) % w, w00, w01, fy * (1.0 - fx), fy * fx
+
+
 @njit
 def env_bilinear(pixels, info, d):
     """The image seen along d as a viewer shows it: bilinear between the four nearest pixel centres (around the
@@ -69,16 +82,7 @@ def env_bilinear(pixels, info, d):
     after mirrors and glass, which no light sample meets); light transport reads `env_radiance`, constant over
     each pixel as the sampling density is."""
     u, v, _ = _uv(info, d)
-    h, w = pixels.shape[0], pixels.shape[1]
-    x = u * w - 0.5
-    y = min(max(v * h - 0.5, 0.0), h - 1.0)
-    j = np.int64(math.floor(x))
-    i = min(np.int64(y), h - 2) if h > 1 else 0
-    fx, fy = x - j, y - i
-    j0, j1 = j % w, (j + 1) % w
-    i1 = min(i + 1, h - 1)
-    w00, w01 = (1.0 - fy) * (1.0 - fx), (1.0 - fy) * fx
-    w10, w11 = fy * (1.0 - fx), fy * fx
+    i, i1, j0, j1, w00, w01, w10, w11 = _bilinear_stencil(u, v, pixels.shape[1], pixels.shape[0])
     return (w00 * pixels[i, j0, 0] + w01 * pixels[i, j1, 0] + w10 * pixels[i1, j0, 0] + w11 * pixels[i1, j1, 0],
             w00 * pixels[i, j0, 1] + w01 * pixels[i, j1, 1] + w10 * pixels[i1, j0, 1] + w11 * pixels[i1, j1, 1],
             w00 * pixels[i, j0, 2] + w01 * pixels[i, j1, 2] + w10 * pixels[i1, j0, 2] + w11 * pixels[i1, j1, 2])
@@ -112,17 +116,8 @@ def _level_bilinear(amb, entry, u, v):
     seam in u, held at the poles in v), as `env_bilinear` reads the image."""
     first = np.int64(amb[entry, 0])
     w = np.int64(amb[entry, 1])
-    h = np.int64(amb[entry, 2])
-    x = u * w - 0.5
-    y = min(max(v * h - 0.5, 0.0), h - 1.0)
-    j = np.int64(math.floor(x))
-    i = min(np.int64(y), h - 2) if h > 1 else 0
-    fx, fy = x - j, y - i
-    j0, j1 = j % w, (j + 1) % w
-    i1 = min(i + 1, h - 1)
+    i, i1, j0, j1, w00, w01, w10, w11 = _bilinear_stencil(u, v, w, np.int64(amb[entry, 2]))
     a, b = first + i * w, first + i1 * w
-    w00, w01 = (1.0 - fy) * (1.0 - fx), (1.0 - fy) * fx
-    w10, w11 = fy * (1.0 - fx), fy * fx
     return (w00 * amb[a + j0, 0] + w01 * amb[a + j1, 0] + w10 * amb[b + j0, 0] + w11 * amb[b + j1, 0],
             w00 * amb[a + j0, 1] + w01 * amb[a + j1, 1] + w10 * amb[b + j0, 1] + w11 * amb[b + j1, 1],
             w00 * amb[a + j0, 2] + w01 * amb[a + j1, 2] + w10 * amb[b + j0, 2] + w11 * amb[b + j1, 2])
