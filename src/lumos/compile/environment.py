@@ -70,6 +70,12 @@ def mean_radiance(image: np.ndarray) -> np.ndarray:
     return (image.astype(np.float64) * w[:, None, None]).sum(axis=(0, 1)) / (w.sum() * image.shape[1])
 
 
+def _row_solid_angles(h: int, w: int) -> np.ndarray:
+    """The solid angle of a pixel in each of the h rows of a w-wide lat-long image."""
+    edges = np.cos(np.arange(h + 1) / h * np.pi)
+    return (edges[:-1] - edges[1:]) * 2.0 * np.pi / w
+
+
 def irradiance_sh(pixels: np.ndarray, rotation: float = 0.0) -> np.ndarray:
     """(9, 3): the irradiance over π, E(n)/π, of a lat-long radiance image turned `rotation` degrees about +y, as
     coefficients of `kernels.illumination.sh9` (Ramamoorthi & Hanrahan 2001, "An Efficient Representation for
@@ -85,8 +91,7 @@ def irradiance_sh(pixels: np.ndarray, rotation: float = 0.0) -> np.ndarray:
     d = lat_long_directions(h, w)  # in the image's own frame
     a = np.radians(rotation)
     x, z = np.cos(a) * d[..., 0] + np.sin(a) * d[..., 2], -np.sin(a) * d[..., 0] + np.cos(a) * d[..., 2]  # the world's
-    edges = np.cos(np.arange(h + 1) / h * np.pi)
-    omega = ((edges[:-1] - edges[1:]) * 2.0 * np.pi / w)[:, None]  # each pixel's solid angle
+    omega = _row_solid_angles(h, w)[:, None]  # each pixel's solid angle
     coefficients = np.zeros((9, 3))
     for i0 in range(0, h, 64):  # a block of rows at a time: (9, rows, w) stays small for a large image
         rows = slice(i0, min(i0 + 64, h))
@@ -133,12 +138,6 @@ def glossy_levels(pixels: np.ndarray, rotation: float = 0.0) -> np.ndarray:
     rows.append(table)
     rows.extend(level.reshape(-1, 3) for level in levels)
     return np.concatenate(rows)
-
-
-def _row_solid_angles(h: int, w: int) -> np.ndarray:
-    """The solid angle of a pixel in each of the h rows of a w-wide lat-long image."""
-    edges = np.cos(np.arange(h + 1) / h * np.pi)
-    return (edges[:-1] - edges[1:]) * 2.0 * np.pi / w
 
 
 def _average_down(src: np.ndarray, h: int, w: int) -> np.ndarray:

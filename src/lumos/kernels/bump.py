@@ -184,9 +184,9 @@ def bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time):
 @njit_inline
 def material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n_sh, u, v, d, width, time):
     """What a ray method needs of the material row `mat` at a hit: (ka, kd, ks, kr, ke, shininess) with its
-    textures applied and the shading normal with its bump or normal map, both filtered over the footprint of a ray cone `width`
-    wide there (`texture.cone_footprint`; width 0: point lookups), for a ray of unit direction d meeting the
-    surface (`ref`, `part`, barycentrics b1, b2) at p, geometric normal n_geo."""
+    textures applied and the shading normal with its bump or normal map, both filtered over the footprint of a ray
+    cone `width` wide there (`texture.cone_footprint`; width 0: point lookups), for a ray of unit direction d
+    meeting the surface (`ref`, `part`, barycentrics b1, b2) at p, geometric normal n_geo."""
     fp = (0.0, 0.0, 0.0, 0.0)
     if mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0:
         fp = cone_footprint(surf, ref, part, p, n_geo, d, width, time)

@@ -7,7 +7,8 @@ computed from the point's b, m and r rather than from the factors alone.
 With g = (1 − r)² the share of the specular reflection that is a sharp mirror and F0s = F0·(1 − m) + b·m its
 colour (F0 the row's dielectric MAT_F0, t its transmission, c its clear coat):
 
-    kd = b·(1 − m)·(1 − F0)·(1 − t)·(1 − 0.04c)    ks = F0s·(1 − 0.04c)·(1 − g)    kr = F0s·(1 − 0.04c)·g
+    kd = b·(1 − m)·(1 − F0)·(1 − t)·(1 − 0.04c)
+    ks = F0s·(1 − 0.04c)·(1 − g)        kr = F0s·(1 − 0.04c)·g
     ka = kd, plus F0s·(1 − 0.04c) + 0.04c where no environment lights the model (MAT_KA_REFLECTS: the
     surroundings it reflects, read as ambient light)
     shininess = the Phong exponent as wide as GGX of width r² (`Principled.classic`'s `phong_exponent`)

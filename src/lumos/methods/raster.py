@@ -86,20 +86,6 @@ def _facing(n, V):
 
 
 @njit_inline
-def _surface_at(tex, mat, p, n, u, v, frame, footprint):
-    """(ka, kd, ks, emission, shininess, shading normal): the material's coefficients at (u, v), filtered over
-    `footprint` (du/dx, dv/dx, du/dy, dv/dy), and n tilted by its bump map or given by its normal map, filtered
-    over the same footprint (the polygon's ∂p/∂u, ∂p/∂v in frame[0:6]; normal maps take their tangent frame from
-    these, not from a mesh's tangents)."""
-    ka, kd, ks, _, ke, shininess = material_coeffs_filtered(tex, mat, u, v, p, footprint[0], footprint[1],
-                                                            footprint[2], footprint[3])
-    if mat[MAT_BUMP] >= 0.0:
-        n = bump_normal_filtered(tex, mat, u, v, p, n, (frame[0], frame[1], frame[2]), (frame[3], frame[4], frame[5]),
-                                 footprint[0], footprint[1], footprint[2], footprint[3])
-    return ka, kd, ks, ke, shininess, n
-
-
-@njit_inline
 def _footprint(cam_vecs, ortho, pixel_size, p, fn, frame):
     """(du/dx, dv/dx, du/dy, dv/dy) at point p of a polygon with unit face normal fn: where the rays through the
     neighbouring pixels meet the polygon's plane (ray differentials), carried to (u, v) by the polygon's

@@ -217,8 +217,9 @@ class Principled(StrictModel):
         kd = b * dielectric * (1.0 - t)
         coat = 0.04 * self.clearcoat  # and reflects it: a mirror when smooth (roughness below 0.5), else a highlight
         smooth = self.clearcoat_roughness < 0.5
-        out = {"ka": kd if environment_lit else kd + specular + coat, "kd": kd, "ks": specular * (1.0 - g) + (0.0 if smooth else coat),
-               "kr": specular * g + (coat if smooth else 0.0), "shininess": phong_exponent(self.roughness ** 2)}
+        out = {"ka": kd if environment_lit else kd + specular + coat, "kd": kd,
+               "ks": specular * (1.0 - g) + (0.0 if smooth else coat), "kr": specular * g + (coat if smooth else 0.0),
+               "shininess": phong_exponent(self.roughness ** 2)}
         if t > 0.0:
             out.update(kt=b * dielectric * t, ior=self.ior, fresnel=True)
         return {k: tuple(float(x) for x in v) if isinstance(v, np.ndarray) else v for k, v in out.items()}
