@@ -140,6 +140,88 @@ def test_parallel_writers_of_one_index_lose_no_entry(tmp_path):
     assert run_child(tmp_path, cache_dir, "int,float,int32,float32")["compiled"] == []
 
 
+SHARING_CHILD = textwrap.dedent("""
+    import json, sys
+    from numba.core import event
+    sys.path.insert(0, sys.argv[1])
+    compiled = []
+    class Count(event.Listener):
+        def on_start(self, ev):
+            compiled.append(ev.data["dispatcher"].py_func.__name__)
+        def on_end(self, ev):
+            pass
+    event.register("numba:compile", Count())
+    import numpy as np
+    import ctshare.kernels as k
+    out = np.zeros(4)
+    getattr(k, sys.argv[2])(np.arange(4.0), out)
+    print(json.dumps({"compiled": sorted(compiled), "out": out.tolist()}))
+""")
+
+
+def write_sharing_package(root: Path, g_body: str = "return x * 2.0 + 1.0", second: str = "g(x[i]) - 1.0") -> None:
+    """Two top-level kernels in one file, both calling the device function `g` (which calls `h`) in another."""
+    pkg = root / "ctshare"
+    pkg.mkdir(exist_ok=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "device.py").write_text(textwrap.dedent(f"""
+        from lumos.kernels.jit import njit, njit_inline
+
+        @njit
+        def h(x):
+            return x * x
+
+        @njit_inline
+        def g(x):
+            {g_body} + h(x) * 0.0
+    """))
+    (pkg / "kernels.py").write_text(textwrap.dedent(f"""
+        from lumos.kernels.jit import njit_serial
+        from .device import g
+
+        @njit_serial
+        def first(x, out):
+            for i in range(x.size):
+                out[i] = g(x[i])
+
+        @njit_serial
+        def second(x, out):
+            for i in range(x.size):
+                out[i] = {second}
+    """))
+
+
+def run_sharing_child(root: Path, cache_dir: Path, kernel: str) -> dict:
+    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache_dir))
+    env.pop("NUMBA_CACHE_DIR", None)
+    proc = subprocess.run([sys.executable, "-c", SHARING_CHILD, str(root), kernel], env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_a_kernel_in_another_process_loads_the_device_functions_it_shares(tmp_path):
+    """Device functions are cached on their own (as linkable IR): a second kernel, compiled in a fresh process,
+    compiles only itself; a changed byte in a device function's file recompiles it and its callers, never loads
+    the stale code; a change to the kernels' file alone leaves the device functions loaded."""
+    write_sharing_package(tmp_path)
+    cache_dir = tmp_path / "cache"
+    first = run_sharing_child(tmp_path, cache_dir, "first")
+    assert first["compiled"] == ["first", "g", "h"] and first["out"] == [1.0, 3.0, 5.0, 7.0]
+    second = run_sharing_child(tmp_path, cache_dir, "second")
+    assert second["compiled"] == ["second"] and second["out"] == [0.0, 2.0, 4.0, 6.0]
+    assert run_sharing_child(tmp_path, cache_dir, "second")["compiled"] == []
+
+    write_sharing_package(tmp_path, g_body="return x * 3.0 + 1.0")  # the device function changes
+    changed = run_sharing_child(tmp_path, cache_dir, "second")
+    assert changed["compiled"] == ["g", "h", "second"] and changed["out"] == [0.0, 3.0, 6.0, 9.0]
+    assert run_sharing_child(tmp_path, cache_dir, "first")["compiled"] == ["first"]  # g and h: loaded, new ones
+
+    write_sharing_package(tmp_path, g_body="return x * 3.0 + 1.0", second="g(x[i]) + 1.0")  # the kernels' file
+    edited = run_sharing_child(tmp_path, cache_dir, "second")
+    assert edited["compiled"] == ["second"] and edited["out"] == [2.0, 5.0, 8.0, 11.0]
+
+
 def test_cache_folders_follow_the_environment(tmp_path, monkeypatch):
     monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path / "mine"))
     assert cache.cache_dirs() == ((tmp_path / "mine").resolve(),)

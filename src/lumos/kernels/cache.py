@@ -33,6 +33,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, IndexDataCacheFile, _CacheLocator
+from numba.core.compiler import CompileResult
 
 try:
     import fcntl
@@ -231,6 +232,31 @@ class KernelLocator(_CacheLocator):
 
 class _KernelCacheImpl(CompileResultCacheImpl):
     _locator_classes = [KernelLocator]
+    #: for a device function's cache, the code library class that reads its entries back
+    #: (`library_class.unserialize(codegen, libdata)`); None for a kernel's, which Numba reads back
+    library_class = None
+
+    def rebuild(self, target_context, payload):
+        if self.library_class is None:
+            return super().rebuild(target_context, payload)
+        return _rebuild(target_context, self.library_class.unserialize(target_context.codegen(), payload[0]),
+                        *payload[1:])
+
+
+def _rebuild(target_context, library, fndesc, env, signature, objectmode, lifted, typeann, reload_init,
+             referenced_envs) -> CompileResult:
+    """Numba's `CompileResult._rebuild`, given the library rather than the data Numba's own class reads."""
+    for fn in reload_init or ():
+        fn()
+    result = CompileResult(target_context=target_context, typing_context=target_context.typing_context,
+                           library=library, environment=env,
+                           entry_point=target_context.get_executable(library, fndesc, env), fndesc=fndesc,
+                           type_annotation=typeann, signature=signature, objectmode=objectmode, lifted=lifted,
+                           typing_error=None, call_helper=None, metadata=None, reload_init=reload_init,
+                           referenced_envs=referenced_envs)
+    for env in referenced_envs:
+        library.codegen.set_env(env.env_name, env)
+    return result
 
 
 class _LockedIndexFile(IndexDataCacheFile):
@@ -300,12 +326,15 @@ class KernelCache(FunctionCache):
             pass  # an unwritable cache folder: the kernel stays compiled for this process only
 
 
-def cached(dispatcher, prefix: str = ""):
+def cached(dispatcher, prefix: str = "", library_class=None):
     """Give a Numba dispatcher (compiled with `cache=False`) a `KernelCache`; `prefix` names its entries apart
-    from another dispatcher's of the same function (Numba's index keys leave the compile options out)."""
+    from another dispatcher's of the same function (Numba's index keys leave the compile options out);
+    `library_class` reads back the entries of a dispatcher whose code library is not Numba's (a device
+    function's, `jit.DeviceLibrary`)."""
     dispatcher._cache = KernelCache(dispatcher.py_func)
     if prefix:
         dispatcher._cache._impl._filename_base = f"{prefix}-{dispatcher._cache._impl._filename_base}"
+    dispatcher._cache._impl.library_class = library_class
     return dispatcher
 
 
