@@ -31,78 +31,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..compile.camera import camera_arrays
-from ..kernels.camera import camera_cone, camera_ray
-from ..kernels.jit import njit, njit_alloc, njit_inline, njit_serial
+from ..kernels.camera import camera_cone
+from ..kernels.jit import njit_alloc
 from ..errors import LumosError
-from ..kernels.views import geometry_of, lighting_of, owned_views, sky_of, surfaces_of, textures_of
-from .adaptive import adaptive_pixel, adaptive_rows, aov_rows
+from ..kernels.views import owned_views
 from .common import SURFACE_AOVS, TERM_CHANNELS, Film, finish, row_bands, run_bands, start
-from .whitted_trace import LOG_DEPTH, LOG_FX, LOG_FY, point_radiance, shutter_time, store_aovs, trace, trace_scratch
+from .whitted_pixels import AOVS, CORNERS, SAMPLES, SQUARES, pixel, pixel_rows
+from .whitted_trace import LOG_DEPTH, LOG_FX, LOG_FY, trace_scratch
 
 AA_NONE, AA_SUPERSAMPLE, AA_ADAPTIVE = 0, 1, 2
 ANTIALIAS_MODES = {"none": AA_NONE, "supersample": AA_SUPERSAMPLE, "adaptive": AA_ADAPTIVE}
-
-
-@njit_serial
-def _sample_rows(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth, mipmap,
-                 radiance, depth, normal, albedo, object_id, samples, terms, want_terms, rays_per_row):
-    """antialias none / supersample: `spp` camera rays per pixel (the pixel centre when spp is 1); with
-    `want_terms`, the mean of the samples' terms in terms[y, x, :18]. Rows y0 … y1−1. `mipmap`: textures filtered
-    over each ray's cone (`kernels.camera.camera_cone`)."""
-    _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth,
-                 camera_cone(cam_params, height, spp, mipmap), radiance, depth, normal, albedo, object_id, samples,
-                 terms, want_terms, rays_per_row, trace_scratch(max_depth, 0, 0, want_terms), np.zeros(18))
-
-
-@njit
-def _sample_band(sa, cam_vecs, cam_params, cam_time, width, height, y0, y1, spp, seed, max_depth, cone, radiance,
-                 depth, normal, albedo, object_id, samples, terms, want_terms, rays_per_row, scratch, tsum):
-    geo, surf, lit, tex = geometry_of(sa), surfaces_of(sa), lighting_of(sa), textures_of(sa)
-    for y in range(y0, y1):
-        rays = 0
-        for x in range(width):
-            rgb, n = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
-                                  max_depth, cone, scratch, sky_of(sa), depth, normal, albedo, object_id, tsum,
-                                  want_terms)
-            rays += n
-            radiance[y, x, 0], radiance[y, x, 1], radiance[y, x, 2] = rgb
-            if want_terms:
-                for k in range(18):
-                    terms[y, x, k] = tsum[k]
-            samples[y, x] = spp
-        rays_per_row[y] += rays
-
-
-@njit_inline
-def sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed, max_depth, cone,
-                 scratch, sky, depth, normal, albedo, object_id, tsum, want_terms):
-    """The mean of pixel (x, y)'s `spp` samples, and the rays traced; AOVs from its first sample; with
-    `want_terms` the mean of its samples' terms in tsum (18). With logging on in `scratch`, every sample's rays
-    go to its log, one tree after another (`lumos.explain`)."""
-    pixel = y * width + x
-    r = g = b = 0.0
-    rays = 0
-    if want_terms:
-        for k in range(18):
-            tsum[k] = 0.0
-    for s in range(spp):
-        o, d = camera_ray(cam_vecs, cam_params, width, height, x, y, s, spp, seed, pixel)
-        time = shutter_time(cam_time, seed, pixel, s)
-        rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, pixel, s, scratch, sky)
-        rays += n
-        r += rgb[0]
-        g += rgb[1]
-        b += rgb[2]
-        if want_terms:
-            for k in range(18):
-                tsum[k] += scratch[6][k]
-        if s == 0:
-            store_aovs(x, y, info, depth, normal, albedo, object_id)
-    inv = 1.0 / spp
-    if want_terms:
-        for k in range(18):
-            tsum[k] *= inv
-    return (r * inv, g * inv, b * inv), rays
 
 
 @njit_alloc
@@ -121,36 +59,36 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
     weight = np.zeros(log_rows)
     value = np.zeros(3)
     cone = camera_cone(cam_params, height, spp if mode != AA_ADAPTIVE else 1, mipmap)
+    cells = np.int64(1) << max_level
+    n = cells + 1
+    depth, normal, albedo = np.zeros((height, width)), np.zeros((height, width, 3)), np.zeros((height, width, 3))
+    object_id = np.zeros((height, width), np.int32)
+    grid = np.empty((n, n, 3))
+    stamp = np.full((n, n), -1, np.int64)
+    stack = np.empty((4 * max_level + 4, 4), np.int64)
+    pending = np.empty((5, 2), np.int64)
+    weights = np.zeros((n, n))
+    corners = np.zeros((height + 1, width + 1, 3))
+    grid_row = np.full((n, n), -1, np.int64)  # the log row of each point's camera ray
+    start = 0
+    # one call of the pixel (one inlined tracer): its samples, or its four corners (top left, top right, bottom
+    # left, bottom right) and then its squares
+    for step in range(1 if mode != AA_ADAPTIVE else 5):
+        stage, px, py = SAMPLES, x, y
+        if mode == AA_ADAPTIVE and step < 4:
+            stage, px, py = CORNERS, x + step % 2, y + step // 2
+            grid_row[(py - y) * cells, (px - x) * cells] = log_n[0]
+        elif mode == AA_ADAPTIVE:
+            stage, start = SQUARES, log_n[0]
+        k = spp if stage == SAMPLES else 1
+        pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, px, py, stage, k, seed, max_depth,
+              cone, threshold, max_level, corners, scratch, sky, grid, stamp, stack, weights, value, pending, depth,
+              normal, albedo, object_id)
     if mode != AA_ADAPTIVE:
-        depth, normal, albedo = np.zeros((height, width)), np.zeros((height, width, 3)), np.zeros((height, width, 3))
-        object_id = np.zeros((height, width), np.int32)
-        rgb, _ = sample_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, spp, seed,
-                              max_depth, cone, scratch, sky, depth, normal, albedo, object_id,
-                              np.zeros(18), False)
-        value[0], value[1], value[2] = rgb
         for row in range(log_n[0]):
             if log[row, LOG_DEPTH] == 0.0:
                 weight[row] = 1.0 / spp
         return value, log, scratch[9], log_n[0], weight
-    cells = np.int64(1) << max_level
-    n = cells + 1
-    corners = np.zeros((height + 1, width + 1, 3))
-    grid_row = np.full((n, n), -1, np.int64)  # the log row of each point's camera ray
-    for cy in range(y, y + 2):
-        for cx in range(x, x + 2):
-            grid_row[(cy - y) * cells, (cx - x) * cells] = log_n[0]
-            rgb, _ = point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, np.float64(cx),
-                            np.float64(cy), seed, cy * (width + 1) + cx, 0, max_depth, scratch, sky,
-                            cone)
-            corners[cy, cx, 0], corners[cy, cx, 1], corners[cy, cx, 2] = rgb
-    start = log_n[0]
-    grid = np.empty((n, n, 3))
-    stamp = np.full((n, n), -1, np.int64)
-    stack = np.empty((4 * max_level + 4, 4), np.int64)
-    weights = np.zeros((n, n))
-    adaptive_pixel(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, x, y, seed, max_depth, cone,
-                   threshold, max_level, corners, scratch, sky, grid, stamp, stack, weights, value,
-                   np.empty((5, 2), np.int64), False)
     for row in range(start, log_n[0]):
         if log[row, LOG_DEPTH] == 0.0:
             gx = np.int64(np.round((log[row, LOG_FX] - x) * cells))
@@ -180,31 +118,32 @@ def render_whitted(compiled, camera, settings, progress=None, rows=None) -> Film
     mipmap = bool(settings.mipmap)
     w, h = np.int64(width), np.int64(height)
     samples = np.zeros((height, width), np.int32)
-    rays = 0
     y_lo, y_hi = (0, height) if rows is None else rows
     bands = row_bands(height, rows=(y_lo, y_hi))
+    corner_rays = np.zeros(height + 1, np.int64)
+    channels = 3 + TERM_CHANNELS if b.want_terms else 3
+
+    threshold, max_level = float(settings.adaptive_threshold), np.int64(settings.adaptive_depth)
+
+    def rows(stage, corners, counts, spp=1, depth=max_depth, level=max_level):
+        """A pass of `pixel_rows` over a band of rows (`whitted_pixels`)."""
+        return lambda r0, r1: pixel_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
+                                         np.int64(stage), np.int64(spp), seed, depth, mipmap, threshold,
+                                         np.int64(level), corners, b.radiance, b.depth, b.normal, b.albedo,
+                                         b.object_id, samples, b.terms, counts)
+
     if mode == AA_ADAPTIVE:
-        corners = np.zeros((height + 1, width + 1, 3 + TERM_CHANNELS if b.want_terms else 3))
-        corner_rays = np.zeros(height + 1, np.int64)
+        corners = np.zeros((height + 1, width + 1, channels))
         half = None if progress is None else (lambda f: progress(0.5 * f))
-        threshold, max_level = float(settings.adaptive_threshold), np.int64(settings.adaptive_depth)
-        run_bands(lambda r0, r1: adaptive_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                               seed, max_depth, mipmap, threshold, max_level, corners, b.radiance,
-                                               samples, b.terms, corner_rays, True), height + 1, half,
-                  row_bands(height + 1, rows=(y_lo, y_hi + 1)))
+        run_bands(rows(CORNERS, corners, corner_rays), height + 1, half, row_bands(height + 1, rows=(y_lo, y_hi + 1)))
         rest = None if progress is None else (lambda f: progress(0.5 + 0.5 * f))
-        run_bands(lambda r0, r1: adaptive_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                               seed, max_depth, mipmap, threshold, max_level, corners, b.radiance,
-                                               samples, b.terms, b.rays_per_row, False), height, rest, bands)
-        if set(settings.aov) & set(SURFACE_AOVS):
-            run_bands(lambda r0, r1: aov_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                              seed, max_depth, mipmap, b.depth, b.normal, b.albedo, b.object_id,
-                                              b.rays_per_row), height, None, bands)
-        rays = int(corner_rays.sum())
-    else:
-        spp = np.int64(1 if mode == AA_NONE else settings.spp)
-        run_bands(lambda r0, r1: _sample_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
-                                              spp, seed, max_depth, mipmap, b.radiance, b.depth, b.normal, b.albedo,
-                                              b.object_id, samples, b.terms, b.want_terms, b.rays_per_row),
-                  height, progress, bands)
+        run_bands(rows(SQUARES, corners, b.rays_per_row), height, rest, bands)
+        if set(settings.aov) & set(SURFACE_AOVS):  # one more ray through each pixel centre, for the AOVs only
+            run_bands(rows(AOVS, np.zeros((1, 1, 3)), b.rays_per_row, depth=np.int64(0), level=0), height, None,
+                      bands)
+    else:  # (no adaptive grid: level 0)
+        spp = 1 if mode == AA_NONE else settings.spp
+        run_bands(rows(SAMPLES, np.zeros((1, 1, channels)), b.rays_per_row, spp=spp, level=0), height, progress,
+                  bands)
+    rays = int(corner_rays.sum())
     return finish(settings, b, threads, samples, rays + int(b.rays_per_row.sum()), primary_rays=int(samples.sum()))

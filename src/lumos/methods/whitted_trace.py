@@ -1,7 +1,7 @@
 """The Whitted integrator (`trace`): one camera ray's radiance, recursing at each hit into shadow, reflected and
 transmitted rays on an explicit stack, with its terms and, for `lumos.explain`, its ray tree logged (see
-`methods.whitted` for the model). Shared by whitted's samplers: supersampling (`whitted`) and adaptive
-subdivision (`adaptive`).
+`methods.whitted` for the model). Every camera ray of the method, supersampled or adaptive, comes to it from
+one call in `whitted_pixels.pixel`.
 """
 
 from __future__ import annotations
@@ -9,7 +9,6 @@ from __future__ import annotations
 import numpy as np
 
 from .. import config
-from ..kernels.camera import camera_ray_at
 from ..kernels.cutout import closest_visible_hit
 from ..kernels.environment import sky_radiance
 from ..kernels.illumination import PER_LIGHT_SIZE, illuminate_terms, is_solid
@@ -373,20 +372,3 @@ def store_aovs(x, y, info, depth, normal, albedo, object_id):
         normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n
         albedo[y, x, 0], albedo[y, x, 1], albedo[y, x, 2] = kd
         object_id[y, x] = obj
-
-
-@njit_inline
-def point_radiance(geo, surf, lit, tex, cam_vecs, cam_params, cam_time, width, height, fx, fy, seed, key, sample, max_depth,
-           scratch, sky, cone):
-    """The radiance through image point (fx, fy); `key` and `sample` index its random numbers (lens, time); `cone`
-    the camera ray's cone, `sky` what rays that leave the scene see (`views.sky_of`; `trace`)."""
-    lx, ly = rand01(seed, key, sample, 2), rand01(seed, key, sample, 3)
-    o, d = camera_ray_at(cam_vecs, cam_params, width, height, fx, fy, lx, ly)
-    time = shutter_time(cam_time, seed, key, sample)
-    log, log_n = scratch[7], scratch[8]
-    first = log_n[0]
-    rgb, n, info = trace(geo, surf, lit, tex, o, d, cone, time, max_depth, seed, key, sample, scratch, sky)
-    if 0 <= first < log.shape[0]:  # where the camera ray went through the image (lumos.explain)
-        log[first, LOG_FX] = fx
-        log[first, LOG_FY] = fy
-    return rgb, n
