@@ -53,3 +53,33 @@ def test_a_device_function_called_from_python_runs_a_wrapped_twin():
     twin = _shift.__dict__["_python_twin"]
     assert not isinstance(twin, DeviceDispatcher)
     assert all(not isinstance(c.library, DeviceLibrary) for c in twin.overloads.values())
+
+
+@njit
+def _column(values, k):
+    return values[k] * 10.0
+
+
+@njit
+def _pick(pair, k):
+    return pair[k]  # a heterogeneous tuple: only a constant k types
+
+
+@njit_serial
+def _constants_kernel(values, out):
+    out[0] = _column(values, 0) + _column(values, 1) + _column(values, 2)
+    out[1] = _pick((values[0], 7), 1)
+
+
+def test_an_integer_constant_argument_compiles_one_plain_signature(tmp_path, monkeypatch):
+    """Numba would compile `_column` once per constant column; a device function gets one int64 signature, and
+    a body that needs the constant (a static index into a heterogeneous tuple) gets the literal one."""
+    from numba.core import types
+
+    monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path))
+    out = np.zeros(2)
+    _constants_kernel(np.array([1.0, 2.0, 3.0]), out)
+    assert out.tolist() == [60.0, 7.0]
+    assert list(_column.overloads) == [(types.Array(types.float64, 1, "C"), types.int64)]
+    (pick_args,) = _pick.overloads
+    assert isinstance(pick_args[1], types.IntegerLiteral) and pick_args[1].literal_value == 1

@@ -8,6 +8,7 @@ import zlib
 
 import llvmlite.binding as ll
 import numba
+from numba.core import errors, types, typing
 from numba.core.codegen import JITCodeLibrary
 from numba.core.compiler import Compiler
 from numba.core.compiler_lock import require_global_compiler_lock
@@ -107,6 +108,27 @@ class DeviceCompiler(Compiler):
 class DeviceDispatcher(CPUDispatcher):
     """A device function's dispatcher: jitted callers link its `DeviceLibrary`; a call from Python (tests, a
     Python helper) goes to a twin compiled as an ordinary kernel (with wrappers, cached apart)."""
+
+    def get_call_template(self, args, kws):
+        """Numba's, except that an integer constant argument is typed as a plain int64: Numba would compile the
+        callee once per constant (`rand01` seven times, one per random dimension; `_log3` sixteen, one per log
+        column; a loop counter that starts at 0 twice). Boolean constants stay literal: they are the flags that
+        decide the code on purpose (raycast's `shadows=False`). A body that needs the constant itself (a static
+        index into a heterogeneous tuple) still gets it: its plain compile fails to type, and the literal one
+        is made."""
+        pysig, args = self._compiler.fold_argument_types(args, kws)
+        if self._can_compile:
+            plain = tuple(types.unliteral(a) if isinstance(a, types.IntegerLiteral) else a for a in args)
+            try:
+                self.compile(plain)
+            except errors.TypingError:
+                if plain == tuple(args):
+                    raise
+                self.compile(tuple(args))
+        name = self.py_func.__name__
+        template = typing.make_concrete_template(f"CallTemplate({name})", key=name,
+                                                 signatures=self.nopython_signatures)
+        return template, pysig, args, {}
 
     def __call__(self, *args, **kwargs):
         twin = self.__dict__.get("_python_twin")
