@@ -18,6 +18,8 @@ from setuptools.command.build_py import build_py
 
 class BuildPyWithKernels(build_py):
     def run(self):
+        if not getattr(self, "editable_mode", False):
+            self._drop_stale_modules()
         super().run()
         if getattr(self, "editable_mode", False) or os.environ.get("LUMOS_BUILD_KERNELS", "1") == "0":
             return
@@ -30,6 +32,22 @@ class BuildPyWithKernels(build_py):
         if proc.returncode != 0:  # the package still works: what did not compile here compiles on first use
             print("lumos: warning: some kernels did not compile at install; they will compile on first use",
                   flush=True)
+
+    def _drop_stale_modules(self):
+        """Empty the package's build folder, the kernels compiled there before excepted: pip builds in the
+        checkout's `build/`, and setuptools copies the sources over what an earlier build left, so a module since
+        renamed or deleted would ship in the wheel. (Kept kernels are safe: each is stamped with its sources.)"""
+        package = Path(self.build_lib) / "lumos"
+        if not package.is_dir():
+            return
+        for path in sorted(package.rglob("*"), reverse=True):  # files before the folders that hold them
+            if "_kernel_cache" in path.relative_to(package).parts:
+                continue
+            if path.is_dir() and not path.is_symlink():
+                if not any(path.iterdir()):
+                    path.rmdir()
+            else:
+                path.unlink()
 
 
 setup(cmdclass={"build_py": BuildPyWithKernels})
