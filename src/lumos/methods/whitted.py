@@ -61,14 +61,16 @@ def explain_pixel(sa, cam_vecs, cam_params, cam_time, width, height, x, y, mode,
     cone = camera_cone(cam_params, height, spp if mode != AA_ADAPTIVE else 1, mipmap)
     cells = np.int64(1) << max_level
     n = cells + 1
-    depth, normal, albedo = np.zeros((height, width)), np.zeros((height, width, 3)), np.zeros((height, width, 3))
-    object_id = np.zeros((height, width), np.int32)
+    # the buffers the pixel writes, as far as its own row and column reach: rows 0 … y (+1 for its corners) and
+    # columns 0 … x (+1), not the whole image's (`pixel` takes the image's size apart, for its random keys)
+    depth, normal, albedo = np.zeros((y + 1, x + 1)), np.zeros((y + 1, x + 1, 3)), np.zeros((y + 1, x + 1, 3))
+    object_id = np.zeros((y + 1, x + 1), np.int32)
     grid = np.empty((n, n, 3))
     stamp = np.full((n, n), -1, np.int64)
     stack = np.empty((4 * max_level + 4, 4), np.int64)
     pending = np.empty((5, 2), np.int64)
     weights = np.zeros((n, n))
-    corners = np.zeros((height + 1, width + 1, 3))
+    corners = np.zeros((y + 2, x + 2, 3))
     grid_row = np.full((n, n), -1, np.int64)  # the log row of each point's camera ray
     start = 0
     # one call of the pixel (one inlined tracer): its samples, or its four corners (top left, top right, bottom
