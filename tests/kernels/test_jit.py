@@ -66,19 +66,20 @@ def _pick(pair, k):
 
 
 @njit_serial
-def _constants_kernel(values, out):
-    out[0] = _column(values, 0) + _column(values, 1) + _column(values, 2)
+def _constants_kernel(values, index, out):
+    out[0] = _column(values, 0) + _column(values, 1) + _column(values, index[0])  # index: int32, as read
     out[1] = _pick((values[0], 7), 1)
 
 
 def test_an_integer_constant_argument_compiles_one_plain_signature(tmp_path, monkeypatch):
-    """Numba would compile `_column` once per constant column; a device function gets one int64 signature, and
-    a body that needs the constant (a static index into a heterogeneous tuple) gets the literal one."""
+    """Numba would compile `_column` once per constant column and once more for an int32 one; a device function
+    gets one int64 signature, and a body that needs the constant (a static index into a heterogeneous tuple)
+    gets the literal one."""
     from numba.core import types
 
     monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path))
     out = np.zeros(2)
-    _constants_kernel(np.array([1.0, 2.0, 3.0]), out)
+    _constants_kernel(np.array([1.0, 2.0, 3.0]), np.array([2], np.int32), out)
     assert out.tolist() == [60.0, 7.0]
     assert list(_column.overloads) == [(types.Array(types.float64, 1, "C"), types.int64)]
     (pick_args,) = _pick.overloads

@@ -27,7 +27,7 @@ from .. import config
 from .jit import njit_inline
 from .layout import INFO_KIND, INFO_MATERIAL, MAT_CUTOUT, SHAPE_CSG
 from .surface import surface_at
-from .texture import APPLY_OPACITY, TEX_APPLY, is_hole
+from .texture import APPLY_OPACITY, TEX_APPLY, is_hole, lighting_textures
 from .traverse import any_hit, closest_hit
 
 
@@ -46,7 +46,7 @@ def closest_visible_hit(geo, surf, lit, o, d, t_min, t_max, stack, stack_t, time
         p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, o, d, hit[0], hit[1], hit[2], hit[3], hit[4],
                                                               time)
         mat = lit.materials[mat_id]
-        if mat[MAT_CUTOUT] == 0.0 or not is_hole(lit, mat, u, v, p):
+        if mat[MAT_CUTOUT] == 0.0 or not is_hole(lighting_textures(lit), mat, u, v, p):
             return hit
         t_lo = hit[0]
         holes += 1

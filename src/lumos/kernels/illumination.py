@@ -65,7 +65,7 @@ from .layout import (
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d, turn
 from .surface import offset_origin, surface_at
-from .texture import is_hole
+from .texture import is_hole, lighting_textures
 from .traverse import SHADOW_CUTOFF, closest_hit, transmittance
 from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
 
@@ -401,7 +401,7 @@ def walk_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
         mat = lit.materials[mat_id]
         if light >= 0:  # the emitting surface of an area light is not an occluder
             pass
-        elif mat[MAT_CUTOUT] != 0.0 and is_hole(lit, mat, u, v, p):  # a hole of an opacity cut-out: light passes
+        elif mat[MAT_CUTOUT] != 0.0 and is_hole(lighting_textures(lit), mat, u, v, p):  # a cut-out's hole: light passes
             pass
         else:
             kt0, kt1, kt2 = mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2]

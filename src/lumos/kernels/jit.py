@@ -105,20 +105,32 @@ class DeviceCompiler(Compiler):
         super().__init__(typingctx, targetctx, library, args, return_type, flags, locals)
 
 
+def _plain(arg):
+    """The type a device function is compiled for when called with `arg`: int64 for a signed integer (constant
+    or narrower), `arg` otherwise (see `DeviceDispatcher.get_call_template`)."""
+    if isinstance(arg, types.IntegerLiteral):
+        arg = types.unliteral(arg)
+    if isinstance(arg, types.Integer) and arg.signed and arg.bitwidth < 64:
+        return types.int64
+    return arg
+
+
 class DeviceDispatcher(CPUDispatcher):
     """A device function's dispatcher: jitted callers link its `DeviceLibrary`; a call from Python (tests, a
     Python helper) goes to a twin compiled as an ordinary kernel (with wrappers, cached apart)."""
 
     def get_call_template(self, args, kws):
-        """Numba's, except that an integer constant argument is typed as a plain int64: Numba would compile the
-        callee once per constant (`rand01` seven times, one per random dimension; `_log3` sixteen, one per log
-        column; a loop counter that starts at 0 twice). Boolean constants stay literal: they are the flags that
-        decide the code on purpose (raycast's `shadows=False`). A body that needs the constant itself (a static
-        index into a heterogeneous tuple) still gets it: its plain compile fails to type, and the literal one
-        is made."""
+        """Numba's, except that an integer argument, constant or narrow, is typed as a plain int64: Numba would
+        compile the callee once per constant (`rand01` seven times, one per random dimension; `_log3` sixteen,
+        one per log column; a loop counter that starts at 0 twice) and once more for an int32 (an index read
+        from an int32 array: `sample_light`, `intersect_triangle`, `clip_polygon` and eight more compiled twice).
+        Unsigned integers keep their type (the random numbers' hashes wrap on purpose). Boolean constants stay
+        literal: they are the flags that decide the code on purpose (raycast's `shadows=False`). A body that
+        needs the constant itself (a static index into a heterogeneous tuple) still gets it: its plain compile
+        fails to type, and the literal one is made."""
         pysig, args = self._compiler.fold_argument_types(args, kws)
         if self._can_compile:
-            plain = tuple(types.unliteral(a) if isinstance(a, types.IntegerLiteral) else a for a in args)
+            plain = tuple(_plain(a) for a in args)
             try:
                 self.compile(plain)
             except errors.TypingError:

@@ -113,6 +113,7 @@ from .layout import (
     MAT_TEXTURE,
     MAT_TEXTURE_COUNT,
     MODEL_PRINCIPLED,
+    Textures,
 )
 from .principled_classic import principled_classic
 from .tangents import surface_tangents
@@ -501,6 +502,14 @@ def material_alpha(tex, mat, u, v, p):
             a = texture_rgb(tex, row, u, v, p)[0]
             alpha = alpha * a if tex.tex_info[row, TEX_MODE] == MODE_MULTIPLY else a
     return alpha
+
+
+@njit_inline
+def lighting_textures(lit):
+    """The textures of a `layout.Lighting` view as the `Textures` view the readers here take, without tangents
+    (shape (0, 12)): the shadow rays' and the cut-out walk's holes read the same compiled `is_hole` as
+    shading does, not a second one typed for the other view."""
+    return Textures(lit.tex_info, lit.tex_pixels, lit.tex_pixels[:0])
 
 
 @njit_inline
