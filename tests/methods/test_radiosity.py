@@ -686,3 +686,53 @@ def test_the_sky_as_radiosity_and_path_trace_it_agree():
     hit = traced.aovs["object_id"] >= 0  # (not the sky itself: radiosity shows its mean there)
     ratio = rad[hit].mean(axis=0) / path[hit].mean(axis=0)
     np.testing.assert_allclose(ratio, 1.0, atol=0.04)
+
+
+def test_the_visibility_rays_skip_the_bounding_walls_and_see_the_same():
+    """`occluder_bvh` leaves out exactly the triangles in a plane that bounds the scene: the Cornell box's
+    ceiling, back and side walls and the tall block's base, which (Mitsuba's numbers) lies 1 cm below the
+    floor, so that the floor is kept; and the form factors traced against it equal, number for number, those
+    traced against every triangle: a segment inside the box meets a bounding wall only at its ends."""
+    from lumos.compile import compile_scene, patches
+    from lumos.kernels.layout import INFO_OBJECT
+    from lumos.radiosity import solvers
+    from lumos.radiosity.solve import occluder_bvh, patch_arrays, patch_bvh
+    from lumos.scene.loader import load_scene
+
+    scene = load_scene(CORNELL)
+    compiled = compile_scene(scene)
+    patches.attach(compiled, scene, settings(patch_size=0.4))
+    p = compiled.patches
+    occluders = occluder_bvh(p)
+    kept = np.unique(occluders.arrays.tri_info[:, INFO_OBJECT])
+    names = [o.name for o in scene.objects]
+    walls = [names.index(w) for w in ("ceiling", "back", "green-wall", "red-wall")]
+    poly_object = np.full(len(p.polys), -1)
+    poly_object[p.patch_poly] = p.object_id
+    corners = p.vertices[np.where(p.polys >= 0, p.polys, p.polys[:, :1])]
+    base = np.all(np.abs(corners[:, :, 1] + 1.01) < 1e-9, axis=1)
+    assert base.sum() >= 1 and not np.isin(poly_object[base], walls).any()
+    expected = np.nonzero(~np.isin(poly_object, walls) & ~base)[0]
+    assert len(expected) and np.array_equal(kept, expected)
+
+    src = patch_arrays(p)
+    bvh, tri_poly = patch_bvh(p)
+    rs = settings(patch_size=0.4, visibility_samples=4).radiosity
+    every = solvers.Level(src, src, np.arange(p.n), bvh, tri_poly)
+    walls_left_out = solvers.Level(src, src, np.arange(p.n), bvh, tri_poly, occluders=occluders)
+    F, rays = solvers.form_factor_matrix(rs, every, 3)
+    F_occ, rays_occ = solvers.form_factor_matrix(rs, walls_left_out, 3)
+    assert rays == rays_occ and (F > 0).mean() > 0.1
+    assert np.array_equal(F, F_occ)
+
+
+def test_a_scene_with_nothing_inside_its_bounds_has_no_occluders():
+    """A closed box: every wall bounds it, so no visibility ray walks a tree (`test_furnace` solves it)."""
+    from lumos.compile import compile_scene, patches
+    from lumos.radiosity.solve import occluder_bvh
+    from lumos.scene.model import Scene
+
+    scene = Scene.model_validate(furnace_box())
+    compiled = compile_scene(scene)
+    patches.attach(compiled, scene, settings(patch_size=0.6))
+    assert len(occluder_bvh(compiled.patches).arrays.tri_verts) == 0

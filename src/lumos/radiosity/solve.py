@@ -43,19 +43,64 @@ def patch_arrays(p: Patches) -> L.PatchArrays:
         side_patch=np.ascontiguousarray(p.side_patch), poly_normal=np.ascontiguousarray(p.poly_normal))
 
 
+def _triangles(p: Patches) -> tuple[np.ndarray, np.ndarray]:
+    """The patches' polygons as triangles (quads split in two): corners float64 (m, 3, 3) and the polygon of
+    each, int32 (m,)."""
+    polys = p.polys
+    quad = polys[:, 3] >= 0
+    a = np.concatenate([polys[:, [0, 1, 2]], polys[quad][:, [0, 2, 3]]])
+    owner = np.concatenate([np.arange(len(polys)), np.nonzero(quad)[0]]).astype(np.int32)
+    return p.vertices[a], owner
+
+
 def patch_bvh(p: Patches):
     """A compiled scene of the patches' polygons as triangles (quads split in two), each carrying its polygon
     as object id: what visibility and shooting rays traverse. Returns (CompiledScene, tri_poly int32 (m,))."""
     from ..compile import triangle_arrays
 
-    polys = p.polys
-    quad = polys[:, 3] >= 0
-    a = np.concatenate([polys[:, [0, 1, 2]], polys[quad][:, [0, 2, 3]]])
-    owner = np.concatenate([np.arange(len(polys)), np.nonzero(quad)[0]]).astype(np.int32)
-    verts = p.vertices[a].reshape(-1, 9)
-    compiled = triangle_arrays(verts, owner)
+    verts, owner = _triangles(p)
+    compiled = triangle_arrays(verts.reshape(-1, 9), owner)
     tri_poly = np.ascontiguousarray(compiled.arrays.tri_info[:, L.INFO_OBJECT])
     return compiled, tri_poly
+
+
+#: A triangle lies in a plane that bounds the scene when no vertex of the scene's convex hull is farther than
+#: this share of the scene's size from its plane on the far side (the hull's vertices are float32).
+BOUNDING_PLANE_TOLERANCE = 1e-6
+#: The bounding-plane test costs (hull vertices × triangles); beyond this many products every triangle is kept.
+BOUNDING_PLANE_WORK = 200_000_000
+
+
+def occluder_bvh(p: Patches):
+    """A compiled scene of the patches' triangles that can block a form factor's visibility ray: all but those
+    lying in a plane that bounds the scene (a face of its convex hull: the walls, floor and ceiling of a room or
+    a box). A segment between two points of the scene lies in their convex hull, so it meets such a triangle
+    only at its own ends, which the visibility rays leave out; and a point on the outer side of a bounding
+    plane faces nothing of the scene (cos θ <= 0), so no ray is asked there. Visibility is then the same, but
+    the rays, which cross a room between its walls, no longer walk the BVH nodes of the walls they run along
+    (the Cornell box's form factors: 2.26 -> 1.98 s). Not for rays that may leave the scene (point lights
+    outside it, the sky), which keep `patch_bvh`. Degenerate triangles, which block nothing, are left out too."""
+    import manifold3d
+    from ..compile import triangle_arrays
+
+    verts, owner = _triangles(p)
+    hull = manifold3d.Manifold.hull_points(np.ascontiguousarray(p.vertices, np.float64)).to_mesh()
+    corners = np.asarray(hull.vert_properties, np.float64)[:, :3]
+    keep = np.ones(len(verts), bool)
+    if 0 < len(corners) * len(verts) <= BOUNDING_PLANE_WORK:
+        size = float(np.linalg.norm(p.vertices.max(axis=0) - p.vertices.min(axis=0)))
+        tol = BOUNDING_PLANE_TOLERANCE * max(size, 1e-300)
+        normal = np.cross(verts[:, 1] - verts[:, 0], verts[:, 2] - verts[:, 0])
+        length = np.linalg.norm(normal, axis=1)
+        proper = length > 0.0
+        normal[proper] /= length[proper, None]
+        step = max(1, (1 << 22) // len(corners))
+        for s in range(0, len(verts), step):
+            n = normal[s:s + step]
+            height = corners @ n.T - np.einsum("ij,ij->i", verts[s:s + step, 0], n)  # (hull corners, triangles)
+            bounding = (height.max(axis=0) <= tol) | (height.min(axis=0) >= -tol)
+            keep[s:s + step] = proper[s:s + step] & ~bounding
+    return triangle_arrays(verts[keep].reshape(-1, 9), owner[keep])
 
 
 def solve(scene, settings=None, progress: Optional[Callable[[float], None]] = None,
@@ -92,7 +137,7 @@ def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
     for level_index in range(levels + 1):
         recv = src if level_index == 0 else patch_arrays(elements)
         bvh, tri_poly = patch_bvh(elements)
-        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly, patches, elements)
+        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly, patches, elements, occluder_bvh(elements))
         t1 = time.perf_counter()
         sent, r = _first_light(compiled, recv, bvh, rs, settings.seed)
         direct_s += time.perf_counter() - t1

@@ -78,6 +78,11 @@ class Level:
     tri_poly: np.ndarray  # int32 (m,): the element polygon of each BVH triangle
     src_patches: object = None  # compile.patches.Patches of the patches (the hemicube renders their polygons)
     recv_patches: object = None  # and of the elements
+    occluders: object = None  # CompiledScene of the elements' triangles that may block visibility (`occluder_bvh`)
+
+    def visibility_arrays(self):
+        """The scene arrays the form factors' visibility rays traverse: the occluders where they are known."""
+        return (self.bvh if self.occluders is None else self.occluders).arrays
 
     def patch_means(self, values: np.ndarray) -> np.ndarray:
         """The area-weighted mean of `values` (n_elements, 3) over each patch's elements: (n_patches, 3)."""
@@ -137,11 +142,12 @@ def form_factor_matrix(rs, level: Level, seed) -> tuple[np.ndarray, int]:
 
     band = max(1, min(n, (1 << 20) // max(m, 1)))  # rows per kernel call: about a million form factors
     rays = 0
+    occluders = level.visibility_arrays()
     for start in range(0, n, band):
         rows = np.arange(start, min(n, start + band), dtype=np.int64)
         counts = np.zeros(len(rows), np.int64)
         out = F[start:start + len(rows)]
-        parallel_for(lambda r0, r1: ff_rows_raycast(level.bvh.arrays, level.recv, level.src, level.recv_patch, rows,
+        parallel_for(lambda r0, r1: ff_rows_raycast(occluders, level.recv, level.src, level.recv_patch, rows,
                                                     np.int64(rs.visibility_samples), np.int64(seed), out, counts,
                                                     np.int64(r0), np.int64(r1)), 0, len(rows))
         rays += int(counts.sum())
@@ -228,6 +234,7 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
     shots = 0
     residual = 1.0
     next_report = 0.0
+    occluders = level.visibility_arrays()
     while shots < limit:
         unshot = level.patch_means(unshot_e)
         power = _lum(unshot) * area
@@ -253,7 +260,7 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
             todo = np.array([q for q, j in enumerate(top) if int(j) not in kept], np.int64)
             if len(todo):
                 fresh = np.empty((len(recv.area), len(todo)))
-                parallel_for(lambda c0, c1: shoot_raycast(level.bvh.arrays, recv, src, level.recv_patch, top[todo],
+                parallel_for(lambda c0, c1: shoot_raycast(occluders, recv, src, level.recv_patch, top[todo],
                                                           d[todo], np.int64(rs.visibility_samples), np.int64(seed),
                                                           np.int64(shots), threshold, fresh, rays, np.int64(c0),
                                                           np.int64(c1)), 0, len(rays))
