@@ -259,3 +259,35 @@ def test_an_installed_wheel_compiles_nothing(tmp_path):
     lines = [line for line in proc.stderr.splitlines() if line.split()[1:2] and line.split()[1] in warmed]
     assert len(lines) == len(warmed), proc.stderr
     assert all("up to date" in line for line in lines), proc.stderr
+
+
+def test_numbas_own_overloads_are_cached_too(tmp_path):
+    """The implementations Numba compiles for `np.empty`, `max` and the like (its `@overload`s) are kept in the
+    kernel cache: a second kernel in a fresh process that uses them compiles only itself."""
+    pkg = tmp_path / "ctshare"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "kernels.py").write_text(textwrap.dedent("""
+        import numpy as np
+        from lumos.kernels.jit import njit_serial
+
+        @njit_serial
+        def first(x, out):
+            tmp = np.empty(x.size)
+            for i in range(x.size):
+                tmp[i] = max(x[i], 1.5)
+            out[:] = tmp
+
+        @njit_serial
+        def second(x, out):
+            tmp = np.empty(x.size)
+            for i in range(x.size):
+                tmp[i] = max(x[i], 2.5) + 1.0
+            out[:] = tmp
+    """))
+    cache_dir = tmp_path / "cache"
+    first = run_sharing_child(tmp_path, cache_dir, "first")
+    assert "first" in first["compiled"] and len(first["compiled"]) > 3 and first["out"] == [1.5, 1.5, 2.0, 3.0]
+    second = run_sharing_child(tmp_path, cache_dir, "second")
+    assert second["compiled"] == ["second"] and second["out"] == [3.5, 3.5, 3.5, 4.0]
+    assert any(p.name.startswith("dol-") for p in cache_dir.rglob("*.nbi"))

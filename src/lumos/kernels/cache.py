@@ -32,6 +32,7 @@ import types
 from functools import lru_cache
 from pathlib import Path
 
+import numba
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, IndexDataCacheFile, _CacheLocator
 from numba.core.compiler import CompileResult
 
@@ -219,7 +220,10 @@ class KernelLocator(_CacheLocator):
 
     def get_source_stamp(self):
         if self._stamp is None:  # computed at the first load or save, once every module is imported
-            self._stamp = closure_stamp(self._py_func)
+            if self._py_func.__module__.split(".")[0] == "numba":  # Numba's own overloads: its version's
+                self._stamp = f"numba {numba.__version__}"
+            else:
+                self._stamp = closure_stamp(self._py_func)
         return self._stamp
 
     def get_disambiguator(self):
@@ -313,6 +317,8 @@ class KernelCache(FunctionCache):
         if not self._enabled:
             return None
         key = self._index_key(sig, target_context.codegen())
+        if key is None:
+            return None
         for index in self._index_files():
             data = index.load(key)
             if data is not None:
@@ -326,12 +332,34 @@ class KernelCache(FunctionCache):
             pass  # an unwritable cache folder: the kernel stays compiled for this process only
 
 
-def cached(dispatcher, prefix: str = "", library_class=None):
-    """Give a Numba dispatcher (compiled with `cache=False`) a `KernelCache`; `prefix` names its entries apart
-    from another dispatcher's of the same function (Numba's index keys leave the compile options out);
-    `library_class` reads back the entries of a dispatcher whose code library is not Numba's (a device
-    function's, `jit.DeviceLibrary`)."""
-    dispatcher._cache = KernelCache(dispatcher.py_func)
+class OverloadCache(KernelCache):
+    """The cache of an `@overload`'s implementation (Numba's own `np.empty`, `max`, `hasattr`…, which Numba
+    compiles again in every process: 79 of them, 3.2 s of ray casting's first compile). Keyed as Numba keys any
+    entry, by the signature, the bytecode and the closure's cell contents (which the overload chose for the
+    argument types), and stamped with Numba's version; an implementation whose cells or code do not pickle is
+    compiled and not kept."""
+
+    def _index_key(self, sig, codegen):
+        try:
+            return super()._index_key(sig, codegen)
+        except Exception:  # (cloudpickle's errors for a cell it cannot pickle are of no one class)
+            return None
+
+    def _save_overload(self, sig, data):
+        if self._index_key(sig, data.codegen) is None:
+            return
+        try:
+            super()._save_overload(sig, data)
+        except Exception:  # what it refers to does not pickle (a generator in its environment): not kept
+            pass
+
+
+def cached(dispatcher, prefix: str = "", library_class=None, cache_class=KernelCache):
+    """Give a Numba dispatcher (compiled with `cache=False`) a `KernelCache` (or `cache_class`); `prefix` names
+    its entries apart from another dispatcher's of the same function (Numba's index keys leave the compile
+    options out); `library_class` reads back the entries of a dispatcher whose code library is not Numba's (a
+    device function's, `jit.DeviceLibrary`)."""
+    dispatcher._cache = cache_class(dispatcher.py_func)
     if prefix:
         dispatcher._cache._impl._filename_base = f"{prefix}-{dispatcher._cache._impl._filename_base}"
     dispatcher._cache._impl.library_class = library_class

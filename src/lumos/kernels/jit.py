@@ -4,6 +4,8 @@ No `fastmath`: the watertight triangle test relies on exact IEEE products (FMA c
 antisymmetry of shared-edge tests), and "no hit yet" comparisons must not be folded away.
 """
 
+import inspect
+import os
 import zlib
 
 import llvmlite.binding as ll
@@ -13,8 +15,9 @@ from numba.core.codegen import JITCodeLibrary
 from numba.core.compiler import Compiler
 from numba.core.compiler_lock import require_global_compiler_lock
 from numba.core.registry import CPUDispatcher
+from numba.core.typing.templates import _OverloadFunctionTemplate
 
-from .cache import cached
+from .cache import OverloadCache, cached
 
 # Device functions: what only other kernels call. Numba compiles every function it meets into a library of its
 # own: it generates a CPython and a C wrapper for it (code that unboxes every argument, every array of every
@@ -148,6 +151,52 @@ class DeviceDispatcher(CPUDispatcher):
             options = {k: v for k, v in self.targetoptions.items() if k not in _DEVICE and k != "nopython"}
             twin = self._python_twin = cached(numba.njit(cache=False, **options)(self.py_func), prefix="py")
         return twin(*args, **kwargs)
+
+
+def _cached_overload(jitter):
+    """Numba's jit decorator for an `@overload`'s implementation, which, when the implementation is Numba's or
+    lumos's and comes from a source file (not `exec`), compiles it as a device function (`DeviceCompiler`: no
+    wrappers, no machine code of its own; its callers link its IR in, as they did) and keeps it in the kernel
+    cache (`cache.OverloadCache`)."""
+
+    def jit_cached(*args, **options):
+        decorate = jitter(*args, **options)
+
+        def wrap(py_func):
+            module = str(getattr(py_func, "__module__", None) or "").split(".")[0]
+            source = inspect.getsourcefile(py_func) if module in ("numba", __name__.split(".")[0]) else None
+            if args or "pipeline_class" in options or not source or not os.path.isfile(source):
+                return decorate(py_func)
+            dispatcher = jitter(**{**options, **_DEVICE}, pipeline_class=DeviceCompiler)(py_func)
+            if type(dispatcher) is not CPUDispatcher:  # (NUMBA_DISABLE_JIT: the function itself)
+                return dispatcher
+            return cached(dispatcher, prefix="dol", library_class=DeviceLibrary, cache_class=OverloadCache)
+
+        return wrap
+
+    return jit_cached
+
+
+def _cache_overloads():
+    """Numba compiles the implementation of each `@overload` it meets (its own `np.empty`, `max`, `hasattr`…, and
+    `simd`'s) into a dispatcher of its own, with a Python wrapper, its own full optimisation and machine code
+    that nothing runs (its callers link its IR in), and without a cache, so every process compiled them again:
+    79 of them, 3.1-3.3 s of ray casting's first compile. From here on they compile as device functions (1.2 s)
+    and are cached. Numba's overload templates take their jit decorator from `_get_jit_decorator`, which is
+    wrapped once, for every function compiled in this process."""
+    numba_decorator = _OverloadFunctionTemplate._get_jit_decorator
+    if getattr(numba_decorator, "_lumos", False):
+        return
+
+    def _get_jit_decorator(self):
+        jitter = numba_decorator(self)
+        return _cached_overload(jitter) if jitter is numba.jit else jitter
+
+    _get_jit_decorator._lumos = True
+    _OverloadFunctionTemplate._get_jit_decorator = _get_jit_decorator
+
+
+_cache_overloads()
 
 
 def _cached_njit(device=False, **options):
