@@ -22,8 +22,9 @@ from typing import Callable, Iterator, Optional
 from numba.core import event
 
 #: About how long a first run compiles every kernel of a method, the BVH build included, on one of two cores
-#: (`benchmarks/bench_compile.py`, 2026-12-04), when no warm-up has measured it on this machine.
-ESTIMATE_S = {"raycast": 22, "raster": 30, "whitted": 35, "path": 25, "radiosity": 28}
+#: (a first render on a fresh cache, its `jit_s`: BENCHMARKS.md, 2026-12-05, sixth session), when no warm-up has
+#: measured it on this machine.
+ESTIMATE_S = {"raycast": 17, "raster": 19, "whitted": 25, "path": 25, "radiosity": 16}
 
 
 #: the file beside the kernels where `lumos warmup` keeps what each kernel family took to compile
