@@ -23,8 +23,10 @@ from lumos.kernels import cache
 PACKAGE = Path(lumos.__file__).resolve().parent
 
 CHILD = textwrap.dedent("""
-    import json, sys
+    import json, os, sys
+    import numba
     from numba.core import event
+    numba.__version__ = os.environ.get("CT_NUMBA_VERSION", numba.__version__)  # another Numba, as its stamp sees it
     sys.path.insert(0, sys.argv[1])
     top = []
     class Count(event.Listener):
@@ -141,8 +143,10 @@ def test_parallel_writers_of_one_index_lose_no_entry(tmp_path):
 
 
 SHARING_CHILD = textwrap.dedent("""
-    import json, sys
+    import json, os, sys
+    import numba
     from numba.core import event
+    numba.__version__ = os.environ.get("CT_NUMBA_VERSION", numba.__version__)  # another Numba, as its stamp sees it
     sys.path.insert(0, sys.argv[1])
     compiled = []
     class Count(event.Listener):
@@ -191,8 +195,8 @@ def write_sharing_package(root: Path, g_body: str = "return x * 2.0 + 1.0", seco
     """))
 
 
-def run_sharing_child(root: Path, cache_dir: Path, kernel: str) -> dict:
-    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache_dir))
+def run_sharing_child(root: Path, cache_dir: Path, kernel: str, **extra_env) -> dict:
+    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache_dir), **extra_env)
     env.pop("NUMBA_CACHE_DIR", None)
     proc = subprocess.run([sys.executable, "-c", SHARING_CHILD, str(root), kernel], env=env, capture_output=True,
                           text=True, timeout=300)
@@ -263,7 +267,8 @@ def test_an_installed_wheel_compiles_nothing(tmp_path):
 
 def test_numbas_own_overloads_are_cached_too(tmp_path):
     """The implementations Numba compiles for `np.empty`, `max` and the like (its `@overload`s) are kept in the
-    kernel cache: a second kernel in a fresh process that uses them compiles only itself."""
+    kernel cache: a second kernel in a fresh process that uses them compiles only itself; under another Numba
+    version they are compiled again, never loaded."""
     pkg = tmp_path / "ctshare"
     pkg.mkdir()
     (pkg / "__init__.py").write_text("")
@@ -291,3 +296,6 @@ def test_numbas_own_overloads_are_cached_too(tmp_path):
     second = run_sharing_child(tmp_path, cache_dir, "second")
     assert second["compiled"] == ["second"] and second["out"] == [3.5, 3.5, 3.5, 4.0]
     assert any(p.name.startswith("dol-") for p in cache_dir.rglob("*.nbi"))
+    (pkg / "kernels.py").write_text((pkg / "kernels.py").read_text() + "\n# edited: both kernels compile again\n")
+    other = run_sharing_child(tmp_path, cache_dir, "second", CT_NUMBA_VERSION="0.0.other")
+    assert "second" in other["compiled"] and len(other["compiled"]) > 3 and other["out"] == [3.5, 3.5, 3.5, 4.0]
