@@ -4,6 +4,7 @@ still answer calls from Python through a twin; top-level kernels hold their devi
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from numba.core.codegen import JITCodeLibrary
 
 from lumos.kernels import vec
@@ -84,3 +85,19 @@ def test_an_integer_constant_argument_compiles_one_plain_signature(tmp_path, mon
     assert list(_column.overloads) == [(types.Array(types.float64, 1, "C"), types.int64)]
     (pick_args,) = _pick.overloads
     assert isinstance(pick_args[1], types.IntegerLiteral) and pick_args[1].literal_value == 1
+
+
+@njit_serial
+def _assign(dst, src):
+    dst[1:4] = src
+
+
+def test_a_slice_assignment_of_the_wrong_size_raises_without_formatting_shapes(tmp_path, monkeypatch):
+    """Numba's CPU target formats both shapes into the message, which compiled its integer `str` and string
+    joins into every process's first kernel; lumos raises Numba's generic target's plain message instead."""
+    monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path))
+    dst = np.zeros(5)
+    _assign(dst, np.ones(3))
+    assert dst.tolist() == [0.0, 1.0, 1.0, 1.0, 0.0]
+    with pytest.raises(ValueError, match="^cannot assign slice from input of different size$"):
+        _assign(dst, np.ones(2))

@@ -16,6 +16,7 @@ from numba.core.compiler import Compiler
 from numba.core.compiler_lock import require_global_compiler_lock
 from numba.core.registry import CPUDispatcher
 from numba.core.typing.templates import _OverloadFunctionTemplate
+from numba.extending import overload
 
 from .cache import OverloadCache, cached
 
@@ -197,6 +198,33 @@ def _cache_overloads():
 
 
 _cache_overloads()
+
+
+def _shape_mismatch(src_shapes, index_shape):
+    """What a slice assignment of the wrong size raises (see `_plain_shape_errors`)."""
+    raise ValueError("cannot assign slice from input of different size")
+
+
+@overload(_shape_mismatch, target="generic")
+def _shape_mismatch_jit(src_shapes, index_shape):
+    def impl(src_shapes, index_shape):
+        raise ValueError("cannot assign slice from input of different size")
+
+    return impl
+
+
+def _plain_shape_errors():
+    """Numba's CPU target raises a slice assignment's size mismatch (`a[i, :6] = box`, `row[:] = (x, y)`: every
+    kernel has one) with both shapes in the message, formatted at run time, so the first such assignment in a
+    process compiled Numba's integer `str`, `repr`, string joins and concatenation: 0.9 s of the BVH build's
+    first compile, the warm-up's serial start. The message without the shapes is Numba's own for its generic
+    target; lumos's assignments are sized by construction, so the error would be lumos's bug either way."""
+    from numba.np import arrayobj
+
+    arrayobj.raise_with_shape_context = _shape_mismatch
+
+
+_plain_shape_errors()
 
 
 def _cached_njit(device=False, **options):
