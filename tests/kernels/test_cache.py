@@ -299,3 +299,28 @@ def test_numbas_own_overloads_are_cached_too(tmp_path):
     (pkg / "kernels.py").write_text((pkg / "kernels.py").read_text() + "\n# edited: both kernels compile again\n")
     other = run_sharing_child(tmp_path, cache_dir, "second", CT_NUMBA_VERSION="0.0.other")
     assert "second" in other["compiled"] and len(other["compiled"]) > 3 and other["out"] == [3.5, 3.5, 3.5, 4.0]
+
+
+def test_an_overload_is_cached_once_per_callers_options(tmp_path):
+    """Numba compiles an overload's implementation once per caller's inherited options (a device function
+    without the runtime, a kernel with it) and keeps both apart in a process; so does the cache: `max` called
+    from each is two entries, not one that the other would load."""
+    pkg = tmp_path / "ctshare"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "kernels.py").write_text(textwrap.dedent("""
+        from lumos.kernels.jit import njit, njit_serial
+
+        @njit
+        def g(a):
+            return max(a, 0.5) * 2.0
+
+        @njit_serial
+        def first(x, out):
+            for i in range(x.size):
+                out[i] = g(x[i]) + max(x[i], 0.25)
+    """))
+    cache_dir = tmp_path / "cache"
+    assert run_sharing_child(tmp_path, cache_dir, "first")["out"] == [1.25, 3.0, 6.0, 9.0]
+    entries = [p for p in cache_dir.rglob("dol-*ol_max*.nbc")]
+    assert len(entries) == 2, entries

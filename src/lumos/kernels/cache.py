@@ -35,6 +35,7 @@ from pathlib import Path
 import numba
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, IndexDataCacheFile, _CacheLocator
 from numba.core.compiler import CompileResult
+from numba.core.targetconfig import ConfigStack
 
 try:
     import fcntl
@@ -339,11 +340,18 @@ class OverloadCache(KernelCache):
     argument types), and stamped with Numba's version; an implementation whose cells or code do not pickle is
     compiled and not kept."""
 
+    #: the options an implementation takes from the function that calls it (Numba's `inherit_if_not_set`): Numba
+    #: keeps one implementation per caller's options in a process, so the cache keys them too (an implementation
+    #: compiled without the runtime, for a device function, never reaches a kernel that counts references)
+    INHERITED = ("nrt", "error_model", "fastmath", "forceinline")
+
     def _index_key(self, sig, codegen):
         try:
-            return super()._index_key(sig, codegen)
+            key = super()._index_key(sig, codegen)
         except Exception:  # (cloudpickle's errors for a cell it cannot pickle are of no one class)
             return None
+        caller = ConfigStack.top_or_none()  # the caller's options while it types this call, at load and at save
+        return key + (tuple(str(getattr(caller, name, None)) for name in self.INHERITED),)
 
     def _save_overload(self, sig, data):
         if self._index_key(sig, data.codegen) is None:
