@@ -127,7 +127,7 @@ def render_whitted(compiled, camera, settings, progress=None, rows=None) -> Film
 
     threshold, max_level = float(settings.adaptive_threshold), np.int64(settings.adaptive_depth)
 
-    def rows(stage, corners, counts, spp=1, depth=max_depth, level=max_level):
+    def stage_pass(stage, corners, counts, spp=1, depth=max_depth, level=max_level):
         """A pass of `pixel_rows` over a band of rows (`whitted_pixels`)."""
         return lambda r0, r1: pixel_rows(sa, cam_vecs, cam_params, cam_time, w, h, np.int64(r0), np.int64(r1),
                                          np.int64(stage), np.int64(spp), seed, depth, mipmap, threshold,
@@ -137,15 +137,16 @@ def render_whitted(compiled, camera, settings, progress=None, rows=None) -> Film
     if mode == AA_ADAPTIVE:
         corners = np.zeros((height + 1, width + 1, channels))
         half = None if progress is None else (lambda f: progress(0.5 * f))
-        run_bands(rows(CORNERS, corners, corner_rays), height + 1, half, row_bands(height + 1, rows=(y_lo, y_hi + 1)))
+        run_bands(stage_pass(CORNERS, corners, corner_rays), height + 1, half,
+                  row_bands(height + 1, rows=(y_lo, y_hi + 1)))
         rest = None if progress is None else (lambda f: progress(0.5 + 0.5 * f))
-        run_bands(rows(SQUARES, corners, b.rays_per_row), height, rest, bands)
+        run_bands(stage_pass(SQUARES, corners, b.rays_per_row), height, rest, bands)
         if set(settings.aov) & set(SURFACE_AOVS):  # one more ray through each pixel centre, for the AOVs only
-            run_bands(rows(AOVS, np.zeros((1, 1, 3)), b.rays_per_row, depth=np.int64(0), level=0), height, None,
+            run_bands(stage_pass(AOVS, np.zeros((1, 1, 3)), b.rays_per_row, depth=np.int64(0), level=0), height, None,
                       bands)
     else:  # (no adaptive grid: level 0)
         spp = 1 if mode == AA_NONE else settings.spp
-        run_bands(rows(SAMPLES, np.zeros((1, 1, channels)), b.rays_per_row, spp=spp, level=0), height, progress,
+        run_bands(stage_pass(SAMPLES, np.zeros((1, 1, channels)), b.rays_per_row, spp=spp, level=0), height, progress,
                   bands)
     rays = int(corner_rays.sum())
     return finish(settings, b, threads, samples, rays + int(b.rays_per_row.sum()), primary_rays=int(samples.sum()))

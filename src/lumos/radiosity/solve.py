@@ -134,10 +134,13 @@ def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
     direct_s = ff_s = 0.0
     rays = iterations = 0
     levels = rs.subdivide_levels if rs.subdivide else 0
+    # only ray-cast form factors trace visibility rays (stochastic rays and hemicubes see every surface)
+    traces_visibility = rs.form_factors == "raycast" and solvers.chosen(rs, patches.n) != "stochastic"
     for level_index in range(levels + 1):
         recv = src if level_index == 0 else patch_arrays(elements)
         bvh, tri_poly = patch_bvh(elements)
-        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly, patches, elements, occluder_bvh(elements))
+        occluders = occluder_bvh(elements) if traces_visibility else None
+        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly, patches, elements, occluders)
         t1 = time.perf_counter()
         sent, r = _first_light(compiled, recv, bvh, rs, settings.seed)
         direct_s += time.perf_counter() - t1
