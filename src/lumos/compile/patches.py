@@ -66,6 +66,9 @@ class Patches:
     smooth_group: np.ndarray  # int32 (n,): patches of one surface the display may smooth across (object, material)
     optics: np.ndarray  # float64 (n, 9): kr (3), kt (3), ior, fresnel (1/0), and 1 for a solid's outside, -1 for
     # its inside, 0 for an open surface: what the two-pass display needs to trace mirrors and glass
+    surfaces: np.ndarray  # float64 (m, 3, 3): the surfaces before they were cut into polygons, as triangles
+    # (a box face, a rect: two): the same geometry as `polys` in far fewer pieces, what blocks visibility rays
+    surface_object: np.ndarray  # int32 (m,): the object (or area light, numbered after them) of each
 
     @property
     def n(self) -> int:
@@ -86,6 +89,8 @@ class _Builder:
         self.meta: list[tuple] = []  # per polygon: (front?, back?, reflectance, emission, object, material, group,
         # optics)
         self.optics = np.zeros(8)  # of the object being added (set by mesh_scene)
+        self.surfaces: list[np.ndarray] = []  # each surface uncut, as triangles (k, 3, 3)
+        self.surface_object: list[np.ndarray] = []
 
     def add(self, verts: np.ndarray, polys: np.ndarray, front: bool, back: bool, rho, le, object_id: int,
             material: int, group: int, solid: bool = False, emit_back: bool = True) -> None:
@@ -457,8 +462,13 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
             le, emit_back = surface.emission, scene.lights[surface.object_id - n_objects].two_sided
         if surface.grid is not None:
             v, polys = _grid_quads(*surface.grid, patch_size)
+            corner, eu, ev = (np.asarray(g, np.float64) for g in surface.grid)
+            b.surfaces.append(np.array([[corner, corner + eu, corner + eu + ev], [corner, corner + eu + ev, corner + ev]]))
         else:
-            v, polys = _split_triangles(*surface.triangles(), patch_size)
+            whole_v, whole_t = surface.triangles()
+            v, polys = _split_triangles(whole_v, whole_t, patch_size)
+            b.surfaces.append(np.asarray(whole_v, np.float64)[np.asarray(whole_t, np.int64)].reshape(-1, 3, 3))
+        b.surface_object.append(np.full(len(b.surfaces[-1]), surface.object_id, np.int32))
         b.add(v, polys, surface.outer, surface.inner, rho, le, surface.object_id, mat, surface.group, surface.solid,
               emit_back)
     return _assemble(b)
@@ -510,7 +520,8 @@ def _assemble(b: _Builder) -> Patches:
         normal=normal[patch_poly] * side[:, None], reflectance=np.ascontiguousarray(np.concatenate(cols["rho"])),
         emission=np.ascontiguousarray(np.concatenate(cols["le"])), object_id=np.concatenate(cols["obj"]),
         material=np.concatenate(cols["mat"]), smooth_group=np.concatenate(cols["group"]),
-        optics=np.ascontiguousarray(np.concatenate(cols["optics"])))
+        optics=np.ascontiguousarray(np.concatenate(cols["optics"])),
+        surfaces=np.concatenate(b.surfaces), surface_object=np.concatenate(b.surface_object))
 
 
 def refine(p: Patches, split_poly: np.ndarray) -> tuple[Patches, np.ndarray]:
@@ -588,7 +599,7 @@ def refine(p: Patches, split_poly: np.ndarray) -> tuple[Patches, np.ndarray]:
         patch_poly=patch_poly, patch_side=patch_side, area=area[patch_poly], centre=centre[patch_poly],
         normal=p.normal[parent], reflectance=p.reflectance[parent], emission=p.emission[parent],
         object_id=p.object_id[parent], material=p.material[parent], smooth_group=p.smooth_group[parent],
-        optics=p.optics[parent]), parent
+        optics=p.optics[parent], surfaces=p.surfaces, surface_object=p.surface_object), parent
 
 
 def attach(compiled, scene, settings) -> None:

@@ -72,18 +72,21 @@ BOUNDING_PLANE_WORK = 200_000_000
 
 
 def occluder_bvh(p: Patches):
-    """A compiled scene of the patches' triangles that can block a form factor's visibility ray: all but those
-    lying in a plane that bounds the scene (a face of its convex hull: the walls, floor and ceiling of a room or
-    a box). A segment between two points of the scene lies in their convex hull, so it meets such a triangle
-    only at its own ends, which the visibility rays leave out; and a point on the outer side of a bounding
-    plane faces nothing of the scene (cos θ <= 0), so no ray is asked there. Visibility is then the same, but
-    the rays, which cross a room between its walls, no longer walk the BVH nodes of the walls they run along
-    (the Cornell box's form factors: 2.26 -> 1.98 s). Not for rays that may leave the scene (point lights
+    """A compiled scene of the triangles that can block a form factor's visibility ray (each carrying its object
+    as object id): the scene's surfaces uncut (`Patches.surfaces`, the same geometry as the patches' polygons in
+    far fewer pieces: the Cornell box's floor, light and blocks are 26 triangles, not the 1,126 of their patches,
+    or 7,240 of their elements after refining), all
+    but those lying in a plane that bounds the scene (a face of its convex hull: the walls, floor and ceiling
+    of a room or a box). A segment between two points of the scene lies in their convex hull, so it meets such a
+    triangle only at its own ends, which the visibility rays leave out; and a point on the outer side of a
+    bounding plane faces nothing of the scene (cos θ <= 0), so no ray is asked there. Visibility is then the
+    same, but the rays, which cross a room between its walls, no longer walk the BVH nodes of the walls they run
+    along (the Cornell box's form factors: 2.26 -> 1.98 s). Not for rays that may leave the scene (point lights
     outside it, the sky), which keep `patch_bvh`. Degenerate triangles, which block nothing, are left out too."""
     import manifold3d
     from ..compile import triangle_arrays
 
-    verts, owner = _triangles(p)
+    verts, owner = p.surfaces, p.surface_object
     hull = manifold3d.Manifold.hull_points(np.ascontiguousarray(p.vertices, np.float64)).to_mesh()
     corners = np.asarray(hull.vert_properties, np.float64)[:, :3]
     keep = np.ones(len(verts), bool)
@@ -136,15 +139,21 @@ def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
     levels = rs.subdivide_levels if rs.subdivide else 0
     # only ray-cast form factors trace visibility rays (stochastic rays and hemicubes see every surface)
     traces_visibility = rs.form_factors == "raycast" and solvers.chosen(rs, patches.n) != "stochastic"
+    # refining cuts polygons in four in their own planes: the surfaces, and what blocks a ray, stay the patches'
+    occluders = occluder_bvh(patches) if traces_visibility else None
+    inherited = columns = None
+    # the elements' own tree: for the rays of point lights and the sky, and for every ray where no occluder tree
+    # stands in (stochastic shooting, whose rays find the element they hit)
+    lit = bool(np.any(compiled.arrays.light_kind <= L.LIGHT_DIRECTIONAL)) or compiled.environment is not None
     for level_index in range(levels + 1):
         recv = src if level_index == 0 else patch_arrays(elements)
-        bvh, tri_poly = patch_bvh(elements)
-        occluders = occluder_bvh(elements) if traces_visibility else None
-        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly, patches, elements, occluders)
+        bvh, tri_poly = patch_bvh(elements) if lit or occluders is None else (None, None)
+        level = solvers.Level(recv, src, recv_patch, bvh, tri_poly, patches, elements, occluders, inherited, columns)
         t1 = time.perf_counter()
         sent, r = _first_light(compiled, recv, bvh, rs, settings.seed)
         direct_s += time.perf_counter() - t1
         result = solvers.run(rs, level, sent, settings.seed, progress, say)
+        columns = result.columns
         rays += r + result.rays
         ff_s += result.form_factor_s
         iterations += result.iterations
@@ -155,7 +164,9 @@ def solve_compiled(compiled, settings, progress=None, say=None) -> Solution:
             break
         if say is not None:
             say(f"refining {int(split.sum()):,} of {len(split):,} polygons where the radiance varies")
+        cut = split[elements.patch_poly]  # per element of this level: its polygon is cut
         elements, parent = refine(elements, split)
+        inherited = np.where(cut[parent], -1, parent).astype(np.int64)
         recv_patch = recv_patch[parent]
     t_solve = time.perf_counter()
     stats = {
