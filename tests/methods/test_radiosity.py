@@ -47,6 +47,46 @@ def kernel_ff(x, n, corners):
     return point_polygon_ff(tuple(x), tuple(n), c, len(corners), np.empty((8, 3)))
 
 
+def test_a_far_patch_takes_a_cubature_within_its_bound(rng):
+    """Beyond 10 of a patch's radii (its farthest corner from its centre), `patch_ff` integrates the
+    point-to-point kernel at Gauss points (2×2 on a parallelogram, a degree-2 rule on a triangle) instead of
+    the contour formula: within 3e-5 of A/(π r²) of the exact value, however the patch is turned. Nearer, or
+    where the patch reaches behind x's tangent plane, it is the contour formula itself."""
+    from lumos.kernels.formfactor import patch_ff
+
+    far = near = 0
+    for _ in range(400):
+        m = rng.normal(size=3)
+        m /= np.linalg.norm(m)
+        e1, e2 = np.cross(m, rng.normal(size=3)), np.cross(m, rng.normal(size=3))
+        k = 3 + int(rng.integers(2))
+        poly = np.array([np.zeros(3), e1, e1 + e2, e2] if k == 4 else [np.zeros(3), e1, e2])
+        if np.cross(poly[1] - poly[0], poly[2] - poly[0]) @ m < 0:
+            poly = poly[::-1]  # counter-clockwise about m
+        centre = poly.mean(axis=0)
+        radius = np.linalg.norm(poly - centre, axis=1).max()
+        area = abs(np.cross(poly[1] - poly[0], poly[-1] - poly[0]) @ m) / (2 if k == 3 else 1)
+        toward = rng.normal(size=3)
+        toward = toward * np.sign(toward @ m) / np.linalg.norm(toward)
+        r = radius * rng.uniform(2.0, 30.0)
+        x = centre + r * toward
+        n = rng.normal(size=3)
+        n = -n * np.sign(n @ toward) / np.linalg.norm(n)
+        if toward @ m < 0.05 or -(n @ toward) < 0.05:
+            continue
+        c = np.zeros((4, 3))
+        c[:k] = poly
+        got = patch_ff(tuple(x), tuple(n), c, k, area, centre, tuple(m), np.empty((8, 3)))
+        exact = kernel_ff(x, n, poly)
+        if r <= 10.0 * radius or np.min((poly - x) @ n) <= 0.0:
+            assert got == exact
+            near += 1
+        else:
+            assert abs(got - exact) <= 3e-5 * area / (math.pi * r * r), (got, exact)
+            far += 1
+    assert far > 100 and near > 50
+
+
 def test_point_to_polygon_is_lamberts_contour_formula(rng):
     for _ in range(50):
         n = rng.normal(size=3)
