@@ -197,6 +197,20 @@ def test_furnace(solver, form_factors):
     np.testing.assert_allclose(L, 0.6, rtol=0.04 if (solver, form_factors) == ("progressive", "hemicube") else 0.01)
 
 
+def test_progressive_shots_beyond_the_kept_columns_budget(monkeypatch):
+    """With room for only a few shooters' form factors (`SHOT_CACHE_BYTES`), the others are traced at every shot
+    and applied once: the furnace comes out the same, only with more rays."""
+    from lumos.radiosity import solvers
+
+    rs = settings(solver="progressive", patch_size=0.6, tolerance=1e-4)
+    whole = solve(furnace_box(), rs)
+    n = whole.n_elements
+    monkeypatch.setattr(solvers, "SHOT_CACHE_BYTES", 4 * n * 5)  # five columns
+    tight = solve(furnace_box(), rs)
+    assert tight.stats["rays"] > 2 * whole.stats["rays"]
+    np.testing.assert_allclose(tight.element_radiance[inner(tight)], 0.6, rtol=0.01)
+
+
 def test_energy_balance_in_a_closed_scene():
     """At convergence the power emitted inside the closed box is the power its walls absorb (to the
     tolerance): Σ A·Le = Σ A·(1 − ρ)·(L − Le)/ρ over the inner patches (the irradiance is π(L − Le)/ρ)."""

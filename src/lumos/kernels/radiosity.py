@@ -343,6 +343,38 @@ def _stochastic_chunks(sa, recv, src, tri_poly, shooters, counts, first_ray, pow
 
 
 @njit
+def deliver_shots(kept, slots, w, rho, area, recv_patch, radiance, unshot, patch_unshot, received):
+    """A batch of progressive shots over kept form factors (`kept` float32 (n_elements, k), one column per
+    shooter; `slots` (m,) the columns of the batch's shooters; w (m, 3) each one's unshot radiance times its
+    column's scale): every element i receives g_i = ρ_i·Σ_q kept[i, slots[q]]·w[q], added to its radiance and
+    unshot radiance, and A_i·g_i to the unshot power of its patch (patch_unshot (n_patches, 3)) and to
+    `received` (3,)."""
+    m = slots.shape[0]
+    for i in range(kept.shape[0]):
+        g0 = g1 = g2 = 0.0
+        for q in range(m):
+            f = np.float64(kept[i, slots[q]])
+            g0 += f * w[q, 0]
+            g1 += f * w[q, 1]
+            g2 += f * w[q, 2]
+        g0, g1, g2 = g0 * rho[i, 0], g1 * rho[i, 1], g2 * rho[i, 2]
+        radiance[i, 0] += g0
+        radiance[i, 1] += g1
+        radiance[i, 2] += g2
+        unshot[i, 0] += g0
+        unshot[i, 1] += g1
+        unshot[i, 2] += g2
+        p = recv_patch[i]
+        a = area[i]
+        patch_unshot[p, 0] += a * g0
+        patch_unshot[p, 1] += a * g1
+        patch_unshot[p, 2] += a * g2
+        received[0] += a * g0
+        received[1] += a * g1
+        received[2] += a * g2
+
+
+@njit
 def gauss_seidel_sweep(F, rho, emission, recv_area, recv_patch, patch_area, radiance, patch_radiance):
     """One Gauss–Seidel sweep of L_i = E_i + ρ_i Σ_j F_ij L̄_j over the receiving elements i (F float32
     (n_recv, n_src)), L̄_j the area-weighted mean of patch j's elements, kept up to date as each element

@@ -65,16 +65,7 @@ class Result:
     # mean radiance (gauss_seidel, jacobi)
     rays: int
     form_factor_s: float
-    columns: dict | None = None  # progressive ray-cast shots: shooter → `Column`, for the next level to inherit
-
-
-@dataclass
-class Column:
-    """A shooter's form factors to every receiving element (what `shoot_raycast` wrote, float32), and the scale
-    `_conserving` found for them."""
-
-    values: np.ndarray
-    scale: float
+    columns: object = None  # progressive ray-cast shots: their `Columns`, for the next level to inherit
 
 
 @dataclass
@@ -91,7 +82,7 @@ class Level:
     occluders: object = None  # CompiledScene of the elements' triangles that may block visibility (`occluder_bvh`)
     inherited: np.ndarray | None = None  # int64 (n_elements,): an element's index at the previous level where it
     # is the same element (its polygon was not cut), else -1
-    columns: dict | None = None  # the previous level's `Result.columns`
+    columns: object = None  # the previous level's `Result.columns`
 
     def visibility_arrays(self):
         """The scene arrays the form factors' visibility rays traverse: the occluders where they are known."""
@@ -239,12 +230,15 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
     ff_s = 0.0
     gain = Gain()
     columns = Columns(rs, level, seed, threshold) if hemi is None else None
+    patch_unshot = _patch_sums(level, unshot_e)  # (n_patches, 3): Σ A_i·ΔL_i over each patch's elements
+    order = np.argsort(level.recv_patch, kind="stable")  # the elements of patch j: order[starts[j]:starts[j + 1]]
+    starts = np.searchsorted(level.recv_patch[order], np.arange(len(area) + 1))
     shots = 0
     residual = 1.0
     next_report = 0.0
+    third = np.full(3, 1.0 / 3.0)
     while shots < limit:
-        unshot = level.patch_means(unshot_e)
-        power = _lum(unshot) * area
+        power = patch_unshot @ third  # the unshot power of each patch (its mean unshot radiance times its area)
         residual = float(power.sum()) / total
         if residual <= rs.tolerance:
             break
@@ -254,21 +248,21 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
         top = np.argpartition(power, -m)[-m:] if m < len(area) else np.arange(len(area))
         top = top[np.argsort(-power[top], kind="stable")]
         top = top[power[top] >= SHOT_BATCH_SHARE * power[top[0]]].astype(np.int64)
-        d = unshot[top].copy()
-        before = recv.area @ unshot_e
-        unshot_e[np.isin(level.recv_patch, top)] = 0.0
-        after = recv.area @ unshot_e
+        d = patch_unshot[top] / area[top, None]
+        shot_power = d.T @ area[top]  # (3,): what the batch sends
+        unshot_e[np.concatenate([order[starts[j]:starts[j + 1]] for j in top])] = 0.0
+        patch_unshot[top] = 0.0
         t0 = time.perf_counter()
         if hemi is not None:
+            after = patch_unshot.sum(axis=0)
             for q, j in enumerate(top):
                 hemi.shoot(int(j), d[q], shots + q, radiance, unshot_e)
+            patch_unshot = _patch_sums(level, unshot_e)
+            returned = patch_unshot.sum(axis=0) - after
         else:
-            got = columns.shot(top, d, shots) @ d
-            got *= recv.rho
-            radiance += got
-            unshot_e += got
+            returned = columns.shoot(top, d, shots, radiance, unshot_e, patch_unshot)
         ff_s += time.perf_counter() - t0
-        gain.add(before - after, recv.area @ unshot_e - after)
+        gain.add(shot_power, returned)
         shots += len(top)
         if progress is not None:
             progress(min(1.0, np.log(max(residual, 1e-30)) / np.log(rs.tolerance)))
@@ -279,25 +273,35 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
     radiance = radiance + ambient_term(recv, unshot_e, gain.value())
     if columns is None:
         return Result(radiance, shots, residual, 0, ff_s)
-    return Result(radiance, shots, residual, columns.rays, ff_s, columns.kept)
+    return Result(radiance, shots, residual, columns.rays, ff_s, columns)
+
+
+def _patch_sums(level: Level, values: np.ndarray) -> np.ndarray:
+    """Σ A_i·values_i over each patch's elements: (n_patches, 3)."""
+    n = len(level.src.area)
+    return np.stack([np.bincount(level.recv_patch, level.recv.area * values[:, c], minlength=n) for c in range(3)],
+                    axis=1)
 
 
 class Columns:
     """Progressive refinement's ray-cast shots: each shooter's form factors to every receiving element, F_ij
-    for all i, computed at its first shot (`shoot_raycast`) and kept (`Column`, float32) for its next shots, up
-    to SHOT_CACHE_BYTES in all. At a refined level, the elements that are the previous level's (`Level.inherited`)
-    take their form factors from the previous level's column: only the elements cut from a refined polygon are
-    new, so a level traces the rays of its new elements only (the Cornell box: 4,432 of 5,676 elements at the
-    first refined level, 7,636 of 11,403 at the second)."""
+    for all i, traced at its first shot (`shoot_raycast`) and kept, float32, as a column of `kept` (up to
+    SHOT_CACHE_BYTES in all) for its next shots, which `kernels.radiosity.deliver_shots` applies. At a refined
+    level, the elements that are the previous level's (`Level.inherited`) take their form factors from the
+    previous level's column: only the elements cut from a refined polygon are new, so a level traces the rays
+    of its new elements only (the Cornell box: 4,432 of 5,676 elements at the first refined level, 7,636 of
+    11,403 at the second)."""
 
     def __init__(self, rs, level: Level, seed: int, threshold: float):
         self.rs, self.level, self.seed, self.threshold = rs, level, seed, threshold
-        n = len(level.recv.area)
-        self.kept: dict[int, Column] = {}
-        self.kept_max = SHOT_CACHE_BYTES // (4 * n)
+        n, m = len(level.recv.area), len(level.src.area)
+        self.kept = np.empty((n, int(min(m, SHOT_CACHE_BYTES // (4 * n)))), np.float32, order="F")
+        self.slot = np.full(m, -1, np.int64)  # the column of `kept` that holds each shooter's form factors
+        self.scale = np.ones(m)  # and the factor `_conserving` found for them
+        self.used = 0
         self.rays = 0
         self.occluders = level.visibility_arrays()
-        self.old = level.columns if level.inherited is not None and level.columns else None
+        self.old = level.columns if level.inherited is not None else None
         if self.old is not None:
             self.fresh = np.nonzero(level.inherited < 0)[0]
             self.same = np.nonzero(level.inherited >= 0)[0]
@@ -305,31 +309,51 @@ class Columns:
             self.fresh_recv = _subset(level.recv, self.fresh)
             self.fresh_patch = np.ascontiguousarray(level.recv_patch[self.fresh])
 
-    def shot(self, top: np.ndarray, d: np.ndarray, shot: int) -> np.ndarray:
-        """F (n_elements, len(top)) from every receiving element to each shooter of `top`, whose unshot radiance
-        is `d` (len(top), 3); `shot` numbers the first of them (random streams)."""
-        recv, area = self.level.recv, self.level.src.area
-        ff = np.empty((len(recv.area), len(top)), order="F")  # columns contiguous: one per shooter
-        todo = [q for q, j in enumerate(top) if int(j) not in self.kept]
-        inherit = [q for q in todo if self.old is not None and int(top[q]) in self.old]
-        whole = [q for q in todo if q not in inherit]
-        if whole:
-            ff[:, whole] = self._trace(recv, self.level.recv_patch, top[whole], d[whole], shot)
-        if inherit:
-            ff[np.ix_(self.fresh, inherit)] = self._trace(self.fresh_recv, self.fresh_patch, top[inherit],
-                                                          d[inherit], shot)
-            for q in inherit:
-                ff[self.same, q] = self.old[int(top[q])].values[self.same_from]
-        for q, j in enumerate(top):
-            c = self.kept.get(int(j))
-            if c is not None:
-                np.multiply(c.values, c.scale, out=ff[:, q])
-        if todo:
-            scale = _conserving(ff[:, todo], recv.area, area[top[todo]])
-            for q, f in zip(todo, scale):
-                if len(self.kept) < self.kept_max:
-                    self.kept[int(top[q])] = Column(ff[:, q].astype(np.float32), float(f))
-                ff[:, q] *= f
+    def shoot(self, top: np.ndarray, d: np.ndarray, shot: int, radiance, unshot, patch_unshot) -> np.ndarray:
+        """Shoot the patches `top` with unshot radiance `d` (len(top), 3) into every receiving element: each
+        receives ρ_i·Σ_q F_iq·d_q in `radiance` and `unshot` (n_elements, 3), and its patch the power of it in
+        `patch_unshot`; `shot` numbers the first of them (random streams). Returns the power received (3,)."""
+        from ..kernels.radiosity import deliver_shots
+
+        recv = self.level.recv
+        received = np.zeros(3)
+        new = np.nonzero(self.slot[top] < 0)[0]  # shooters not shot at this level yet
+        if len(new):
+            ff = self._columns(top[new], d[new], shot)
+            scale = _conserving(ff, recv.area, self.level.src.area[top[new]])
+            self.scale[top[new]] = scale
+            room = min(len(new), self.kept.shape[1] - self.used)
+            self.kept[:, self.used:self.used + room] = ff[:, :room]
+            self.slot[top[new[:room]]] = np.arange(self.used, self.used + room)
+            self.used += room
+            if room < len(new):  # the budget is spent: these shooters' columns are used once and forgotten
+                left = new[room:]
+                got = recv.rho * ((ff[:, room:] * scale[room:]) @ d[left])
+                radiance += got
+                unshot += got
+                patch_unshot += _patch_sums(self.level, got)
+                received += recv.area @ got
+        kept = top[self.slot[top] >= 0]
+        w = np.ascontiguousarray(d[self.slot[top] >= 0] * self.scale[kept, None])
+        deliver_shots(self.kept, self.slot[kept], w, recv.rho, recv.area, self.level.recv_patch, radiance, unshot,
+                      patch_unshot, received)
+        return received
+
+    def _columns(self, shooters, d, shot) -> np.ndarray:
+        """F (n_elements, len(shooters)) to each of `shooters` never shot at this level: traced, or for the
+        elements of the previous level, that level's own where it shot them too."""
+        level, old = self.level, self.old
+        if old is None:
+            return self._trace(level.recv, level.recv_patch, shooters, d, shot)
+        ff = np.empty((len(level.recv.area), len(shooters)), order="F")
+        had = old.slot[shooters] >= 0
+        if had.any():
+            traced = self._trace(self.fresh_recv, self.fresh_patch, shooters[had], d[had], shot)
+            for k, q in enumerate(np.nonzero(had)[0]):
+                ff[self.fresh, q] = traced[:, k]
+                ff[self.same, q] = old.kept[:, old.slot[shooters[q]]][self.same_from]
+        if not had.all():
+            ff[:, ~had] = self._trace(level.recv, level.recv_patch, shooters[~had], d[~had], shot)
         return ff
 
     def _trace(self, recv, recv_patch, shooters, d, shot) -> np.ndarray:
