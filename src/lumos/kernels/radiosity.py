@@ -189,30 +189,33 @@ def _gather_ff(geo, src, j, x, n_i, samples, key, stack, scratch):
 
 
 @njit_serial
-def shoot_raycast(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, ff, rays_out, c0,
-                  c1):
+def shoot_raycast(sa, recv, src, recv_patch, rows, shooters, cols, unshot_of, samples, seed, shot, threshold, out,
+                  rays_out, c0, c1):
     """Progressive-refinement shots (Cohen et al. 1988) from the patches `shooters` (int64 (m,), rows of `src`)
-    with unshot radiance `unshot_of` (m, 3): every receiving element i of `recv` (whose patch, `recv_patch[i]`,
-    is not the shooter) gets ρ_i·F_ij·ΔL_j from each, F_ij by ray casting written to ff[i, q] (float64 (n_recv, m);
-    the caller normalises and applies them). `shot` numbers the first shooter (random streams). A receiver whose share of a shot
-    would stay below `threshold` (radiance, unoccluded) takes it only with probability share/threshold, weighted
-    by the inverse, and then with one shadow ray instead of `samples`. Chunks c0 … c1−1 of _CHUNK receivers."""
+    with unshot radiance `unshot_of` (m, 3): the form factor F_ij from every receiving element i of `recv`
+    (whose patch, `recv_patch[i]`, is not the shooter) to each, by ray casting, written to
+    out[rows[i], cols[q]] (float32 (n_elements, k): `recv` may be some of the elements, and `rows` their
+    indices; the caller scales and applies them). `shot` numbers the first shooter (random streams). A receiver
+    whose share of a shot would stay below `threshold` (radiance, unoccluded) takes it only with probability
+    share/threshold, weighted by the inverse, and then with one shadow ray instead of `samples`. Chunks c0 …
+    c1−1 of _CHUNK receivers."""
     stack, stack_t, scratch = _scratch()
-    _shoot_chunks(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, ff, rays_out, c0, c1,
-                  stack, stack_t, scratch)
+    _shoot_chunks(sa, recv, src, recv_patch, rows, shooters, cols, unshot_of, samples, seed, shot, threshold, out,
+                  rays_out, c0, c1, stack, scratch)
 
 
 @njit
-def _shoot_chunks(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed, shot, threshold, ff, rays_out, c0, c1,
-                  stack, stack_t, scratch):
+def _shoot_chunks(sa, recv, src, recv_patch, rows, shooters, cols, unshot_of, samples, seed, shot, threshold, out,
+                  rays_out, c0, c1, stack, scratch):
     n = recv.area.shape[0]
     m = shooters.shape[0]
     geo = geometry_of(sa)
     for c in range(c0, c1):
         rays = 0
         for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
+            e = rows[i]
             for q in range(m):
-                ff[i, q] = 0.0
+                out[e, cols[q]] = 0.0
             rho = recv.rho[i]
             rmax = max(rho[0], rho[1], rho[2])
             if rmax <= 0.0:
@@ -231,7 +234,7 @@ def _shoot_chunks(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed,
                 if f == 0.0:
                     continue
                 share = f * rmax * max(d0, d1, d2)
-                key = sample_key(seed, i, shot + q)
+                key = sample_key(seed, e, shot + q)
                 k = samples
                 if share < threshold:
                     # a faint share: one shadow ray, and only with probability share/threshold (weighted by
@@ -242,9 +245,20 @@ def _shoot_chunks(sa, recv, src, recv_patch, shooters, unshot_of, samples, seed,
                     f /= keep
                     k = 1
                 v, r = visibility(geo, x, n_i, src.corners[j], src.k[j], nj, k, key, stack)
-                ff[i, q] = f * v
+                out[e, cols[q]] = f * v
                 rays += r
         rays_out[c] += rays
+
+
+@njit
+def inherit_columns(old, old_cols, same_from, same, out, cols):
+    """out[same[r], cols[q]] = old[same_from[r], old_cols[q]]: the form factors of the elements a refined level
+    keeps (`same`, and their indices at the previous level, `same_from`), taken from the previous level's
+    columns (`radiosity.solvers.Columns`)."""
+    for q in range(cols.shape[0]):
+        a, b = old_cols[q], cols[q]
+        for r in range(same.shape[0]):
+            out[same[r], b] = old[same_from[r], a]
 
 
 @njit_serial
@@ -343,21 +357,24 @@ def _stochastic_chunks(sa, recv, src, tri_poly, shooters, counts, first_ray, pow
 
 
 @njit
-def deliver_shots(kept, slots, w, rho, area, recv_patch, radiance, unshot, patch_unshot, received):
+def deliver_shots(kept, slots, w, rho, area, recv_patch, radiance, unshot, patch_unshot, received, g):
     """A batch of progressive shots over kept form factors (`kept` float32 (n_elements, k), one column per
     shooter; `slots` (m,) the columns of the batch's shooters; w (m, 3) each one's unshot radiance times its
     column's scale): every element i receives g_i = ρ_i·Σ_q kept[i, slots[q]]·w[q], added to its radiance and
     unshot radiance, and A_i·g_i to the unshot power of its patch (patch_unshot (n_patches, 3)) and to
-    `received` (3,)."""
-    m = slots.shape[0]
-    for i in range(kept.shape[0]):
-        g0 = g1 = g2 = 0.0
-        for q in range(m):
-            f = np.float64(kept[i, slots[q]])
-            g0 += f * w[q, 0]
-            g1 += f * w[q, 1]
-            g2 += f * w[q, 2]
-        g0, g1, g2 = g0 * rho[i, 0], g1 * rho[i, 1], g2 * rho[i, 2]
+    `received` (3,). `g` is a float64 (3, n_elements) work array; the sums run down the columns."""
+    n = kept.shape[0]
+    g[:] = 0.0
+    for q in range(slots.shape[0]):
+        col = kept[:, slots[q]]
+        w0, w1, w2 = w[q, 0], w[q, 1], w[q, 2]
+        for i in range(n):
+            f = np.float64(col[i])
+            g[0, i] += f * w0
+            g[1, i] += f * w1
+            g[2, i] += f * w2
+    for i in range(n):
+        g0, g1, g2 = g[0, i] * rho[i, 0], g[1, i] * rho[i, 1], g[2, i] * rho[i, 2]
         radiance[i, 0] += g0
         radiance[i, 1] += g1
         radiance[i, 2] += g2

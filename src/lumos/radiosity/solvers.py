@@ -301,6 +301,8 @@ class Columns:
         self.used = 0
         self.rays = 0
         self.occluders = level.visibility_arrays()
+        self.every = np.arange(n, dtype=np.int64)
+        self.work = np.empty((3, n))
         self.old = level.columns if level.inherited is not None else None
         if self.old is not None:
             self.fresh = np.nonzero(level.inherited < 0)[0]
@@ -315,59 +317,56 @@ class Columns:
         `patch_unshot`; `shot` numbers the first of them (random streams). Returns the power received (3,)."""
         from ..kernels.radiosity import deliver_shots
 
-        recv = self.level.recv
+        recv, area = self.level.recv, self.level.src.area
         received = np.zeros(3)
         new = np.nonzero(self.slot[top] < 0)[0]  # shooters not shot at this level yet
-        if len(new):
-            ff = self._columns(top[new], d[new], shot)
-            scale = _conserving(ff, recv.area, self.level.src.area[top[new]])
-            self.scale[top[new]] = scale
-            room = min(len(new), self.kept.shape[1] - self.used)
-            self.kept[:, self.used:self.used + room] = ff[:, :room]
-            self.slot[top[new[:room]]] = np.arange(self.used, self.used + room)
+        room = min(len(new), self.kept.shape[1] - self.used)
+        if room:
+            cols = np.arange(self.used, self.used + room)
+            self._fill(top[new[:room]], d[new[:room]], shot, self.kept, cols)
+            self.slot[top[new[:room]]] = cols
+            self.scale[top[new[:room]]] = _conserving(self.kept[:, self.used:self.used + room], recv.area,
+                                                      area[top[new[:room]]])
             self.used += room
-            if room < len(new):  # the budget is spent: these shooters' columns are used once and forgotten
-                left = new[room:]
-                got = recv.rho * ((ff[:, room:] * scale[room:]) @ d[left])
-                radiance += got
-                unshot += got
-                patch_unshot += _patch_sums(self.level, got)
-                received += recv.area @ got
+        if room < len(new):  # the budget is spent: these shooters' form factors are used once and forgotten
+            left = new[room:]
+            ff = np.empty((len(recv.area), len(left)), np.float32, order="F")
+            self._fill(top[left], d[left], shot, ff, np.arange(len(left)))
+            got = recv.rho * ((ff * _conserving(ff, recv.area, area[top[left]])) @ d[left])
+            radiance += got
+            unshot += got
+            patch_unshot += _patch_sums(self.level, got)
+            received += recv.area @ got
         kept = top[self.slot[top] >= 0]
         w = np.ascontiguousarray(d[self.slot[top] >= 0] * self.scale[kept, None])
         deliver_shots(self.kept, self.slot[kept], w, recv.rho, recv.area, self.level.recv_patch, radiance, unshot,
-                      patch_unshot, received)
+                      patch_unshot, received, self.work)
         return received
 
-    def _columns(self, shooters, d, shot) -> np.ndarray:
-        """F (n_elements, len(shooters)) to each of `shooters` never shot at this level: traced, or for the
-        elements of the previous level, that level's own where it shot them too."""
-        level, old = self.level, self.old
-        if old is None:
-            return self._trace(level.recv, level.recv_patch, shooters, d, shot)
-        ff = np.empty((len(level.recv.area), len(shooters)), order="F")
-        had = old.slot[shooters] >= 0
-        if had.any():
-            traced = self._trace(self.fresh_recv, self.fresh_patch, shooters[had], d[had], shot)
-            for k, q in enumerate(np.nonzero(had)[0]):
-                ff[self.fresh, q] = traced[:, k]
-                ff[self.same, q] = old.kept[:, old.slot[shooters[q]]][self.same_from]
-        if not had.all():
-            ff[:, ~had] = self._trace(level.recv, level.recv_patch, shooters[~had], d[~had], shot)
-        return ff
+    def _fill(self, shooters, d, shot, out, cols) -> None:
+        """out[:, cols] = F (every receiving element to each of `shooters`, never shot at this level): traced,
+        or for the elements of the previous level, that level's own where it shot them too."""
+        from ..kernels.radiosity import inherit_columns
 
-    def _trace(self, recv, recv_patch, shooters, d, shot) -> np.ndarray:
+        level, old = self.level, self.old
+        had = np.zeros(len(shooters), bool) if old is None else old.slot[shooters] >= 0
+        if had.any():
+            self._trace(self.fresh_recv, self.fresh_patch, self.fresh, shooters[had], d[had], shot, out, cols[had])
+            inherit_columns(old.kept, old.slot[shooters[had]], self.same_from, self.same, out, cols[had])
+        if not had.all():
+            self._trace(level.recv, level.recv_patch, self.every, shooters[~had], d[~had], shot, out, cols[~had])
+
+    def _trace(self, recv, recv_patch, rows, shooters, d, shot, out, cols) -> None:
         from ..kernels.radiosity import shoot_raycast
 
         rays = np.zeros(-(-len(recv.area) // 256), np.int64)
-        out = np.empty((len(recv.area), len(shooters)))
         rs = self.rs
-        parallel_for(lambda c0, c1: shoot_raycast(self.occluders, recv, self.level.src, recv_patch, shooters,
-                                                  np.ascontiguousarray(d), np.int64(rs.visibility_samples),
-                                                  np.int64(self.seed), np.int64(shot), self.threshold, out, rays,
-                                                  np.int64(c0), np.int64(c1)), 0, len(rays))
+        d = np.ascontiguousarray(d)
+        parallel_for(lambda c0, c1: shoot_raycast(self.occluders, recv, self.level.src, recv_patch, rows, shooters,
+                                                  cols, d, np.int64(rs.visibility_samples), np.int64(self.seed),
+                                                  np.int64(shot), self.threshold, out, rays, np.int64(c0),
+                                                  np.int64(c1)), 0, len(rays))
         self.rays += int(rays.sum())
-        return out
 
 
 def _subset(pa, rows: np.ndarray):
