@@ -139,11 +139,16 @@ def patch_ff(x, n, corners, k, area, centre, n_poly, scratch):
     dx, dy, dz = centre[0] - x[0], centre[1] - x[1], centre[2] - x[2]
     d2 = dx * dx + dy * dy + dz * dz
     radius2 = 0.0
-    front = True
+    front = True  # every corner above x's tangent plane
+    behind = True  # every corner below it: the clip leaves nothing
     for i in range(k):
         cx, cy, cz = corners[i, 0] - centre[0], corners[i, 1] - centre[1], corners[i, 2] - centre[2]
         radius2 = max(radius2, cx * cx + cy * cy + cz * cz)
-        front = front and n[0] * (cx + dx) + n[1] * (cy + dy) + n[2] * (cz + dz) > 0.0
+        height = n[0] * (cx + dx) + n[1] * (cy + dy) + n[2] * (cz + dz)
+        front = front and height > 0.0
+        behind = behind and height < 0.0
+    if behind:
+        return 0.0
     if d2 <= _FAR_FIELD * radius2 or not front:
         return point_polygon_ff(x, n, corners, k, scratch)
     if k == 4:  # a parallelogram: corner 0 + corner 2 = corner 1 + corner 3
