@@ -35,6 +35,7 @@ from pathlib import Path
 import numba
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, IndexDataCacheFile, _CacheLocator
 from numba.core.compiler import CompileResult
+from numba.core.runtime.nrt import rtsys
 from numba.core.targetconfig import ConfigStack
 
 try:
@@ -323,6 +324,15 @@ class KernelCache(FunctionCache):
     @property
     def _cache_file(self):
         return self._index_files()[0]
+
+    def load_overload(self, sig, target_context):
+        """Numba's, without its refresh of the target context first: that installs every lowering and typing
+        registry Numba has (0.25 s in a fresh process, the largest part of a warm first render), which only a
+        compile needs, and a compile refreshes the context itself (`CompilerBase`). Code read back needs only
+        the runtime's functions to link against, initialised here."""
+        rtsys.initialize(target_context)
+        with self._guard_against_spurious_io_errors():
+            return self._load_overload(sig, target_context)
 
     def _load_overload(self, sig, target_context):
         if not self._enabled:
