@@ -265,6 +265,26 @@ def test_an_installed_wheel_compiles_nothing(tmp_path):
     assert all("up to date" in line for line in lines), proc.stderr
 
 
+@pytest.mark.skipif(not cache.packaged_dir().is_dir() or "site-packages" not in str(PACKAGE),
+                    reason="lumos is not installed from a wheel (an editable install: run `lumos warmup`)")
+def test_the_first_render_of_every_methods_example_compiles_nothing(tmp_path):
+    """After `pip install .`, the first render of each method on the scenes `bench_first_image.py` times (the
+    showcase with the local methods, path's and radiosity's Cornell boxes, as they are: radiosity's refines its
+    patches) compiles nothing: the warm-up reached every kernel they need, with their signatures."""
+    env = {k: v for k, v in os.environ.items() if k not in ("LUMOS_CACHE_DIR", "NUMBA_CACHE_DIR")}
+    root = Path(__file__).resolve().parents[2]
+    scenes = {"raycast": "showcase.yaml", "raster": "showcase.yaml", "whitted": "showcase.yaml",
+              "path": "path/cornell.yaml", "radiosity": "radiosity/cornell.yaml"}
+    for method, scene in scenes.items():
+        stats = tmp_path / f"{method}.json"
+        proc = subprocess.run([sys.executable, "-m", "lumos", "render", str(root / "examples" / scene), "--method",
+                               method, "--width", "32", "--height", "24", "--spp", "1", "-o",
+                               str(tmp_path / f"{method}.png"), "--stats", str(stats)], env=env,
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0, proc.stderr
+        assert json.loads(stats.read_text())["jit_s"] == 0.0, (method, proc.stderr)
+
+
 def test_numbas_own_overloads_are_cached_too(tmp_path):
     """The implementations Numba compiles for `np.empty`, `max` and the like (its `@overload`s) are kept in the
     kernel cache: a second kernel in a fresh process that uses them compiles only itself; under another Numba

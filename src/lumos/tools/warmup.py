@@ -136,7 +136,7 @@ def _warm_path() -> None:
 
 
 def _warm_radiosity() -> None:
-    _render(_box(), "radiosity")
+    _render(_box(), "radiosity", radiosity={"subdivide": True})  # a refined level inherits the kept form factors
     # a point light (its direct light is gathered apart) and a mirror (the two-pass extension traces it)
     scene = _box()
     scene["lights"].append({"type": "point", "position": [0.3, 0.8, 0.3], "intensity": 0.5})
