@@ -68,7 +68,7 @@ class Patches:
     # its inside, 0 for an open surface: what the two-pass display needs to trace mirrors and glass
     surfaces: np.ndarray  # float64 (m, 3, 3): the surfaces before they were cut into polygons, as triangles
     # (a box face, a rect: two): the same geometry as `polys` in far fewer pieces, what blocks visibility rays
-    surface_object: np.ndarray  # int32 (m,): the object (or area light, numbered after them) of each
+    surface_object: np.ndarray  # int32 (m,): the object (or area light, numbered after them) of each triangle
 
     @property
     def n(self) -> int:
@@ -463,7 +463,8 @@ def mesh_scene(scene, bounds, patch_size=None, segments: int = 48) -> Patches:
         if surface.grid is not None:
             v, polys = _grid_quads(*surface.grid, patch_size)
             corner, eu, ev = (np.asarray(g, np.float64) for g in surface.grid)
-            b.surfaces.append(np.array([[corner, corner + eu, corner + eu + ev], [corner, corner + eu + ev, corner + ev]]))
+            b.surfaces.append(np.array([[corner, corner + eu, corner + eu + ev],
+                                        [corner, corner + eu + ev, corner + ev]]))
         else:
             whole_v, whole_t = surface.triangles()
             v, polys = _split_triangles(whole_v, whole_t, patch_size)

@@ -327,8 +327,8 @@ class KernelCache(FunctionCache):
 
     def load_overload(self, sig, target_context):
         """Numba's, without its refresh of the target context first: that installs every lowering and typing
-        registry Numba has (0.25 s in a fresh process, the largest part of a warm first render), which only a
-        compile needs, and a compile refreshes the context itself (`CompilerBase`). Code read back needs only
+        registry Numba has (0.25 s in a fresh process: a tenth of the radiosity box's warm first render), which only
+        a compile needs, and a compile refreshes the context itself (`CompilerBase`). Code read back needs only
         the runtime's functions to link against, initialised here."""
         rtsys.initialize(target_context)
         with self._guard_against_spurious_io_errors():

@@ -72,17 +72,17 @@ BOUNDING_PLANE_WORK = 200_000_000
 
 
 def occluder_bvh(p: Patches):
-    """A compiled scene of the triangles that can block a form factor's visibility ray (each carrying its object
-    as object id): the scene's surfaces uncut (`Patches.surfaces`, the same geometry as the patches' polygons in
-    far fewer pieces: the Cornell box's floor, light and blocks are 26 triangles, not the 1,126 of their patches,
-    or 7,240 of their elements after refining), all
-    but those lying in a plane that bounds the scene (a face of its convex hull: the walls, floor and ceiling
-    of a room or a box). A segment between two points of the scene lies in their convex hull, so it meets such a
-    triangle only at its own ends, which the visibility rays leave out; and a point on the outer side of a
-    bounding plane faces nothing of the scene (cos θ <= 0), so no ray is asked there. Visibility is then the
-    same, but the rays, which cross a room between its walls, no longer walk the BVH nodes of the walls they run
-    along (the Cornell box's form factors: 2.26 -> 1.98 s). Not for rays that may leave the scene (point lights
-    outside it, the sky), which keep `patch_bvh`. Degenerate triangles, which block nothing, are left out too."""
+    """A compiled scene of the triangles that can block a form factor's visibility ray, each carrying its object
+    as object id: the scene's surfaces uncut (`Patches.surfaces`: the same geometry as the patches' polygons, at
+    every level of refinement, in far fewer pieces; the Cornell box's floor, light and blocks are 26 triangles,
+    not the 1,126 of their patches or the 7,240 of their elements after refining), all but those lying in a plane
+    that bounds the scene (a face of its convex hull: the walls, floor and ceiling of a room or a box). A segment
+    between two points of the scene lies in their convex hull, so it meets such a triangle only at its own ends,
+    which the visibility rays leave out; and a point on the outer side of a bounding plane faces nothing of the
+    scene (cos θ <= 0), so no ray is asked there. Visibility is then the same, but the rays, which cross a room
+    between its walls, no longer walk the BVH nodes of the walls they run along. Not for rays that may leave the
+    scene (point lights outside it, the sky), which keep `patch_bvh`. Degenerate triangles, which block nothing,
+    are left out too."""
     import manifold3d
     from ..compile import triangle_arrays
 

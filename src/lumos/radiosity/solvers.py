@@ -79,7 +79,7 @@ class Level:
     tri_poly: np.ndarray  # int32 (m,): the element polygon of each BVH triangle
     src_patches: object = None  # compile.patches.Patches of the patches (the hemicube renders their polygons)
     recv_patches: object = None  # and of the elements
-    occluders: object = None  # CompiledScene of the elements' triangles that may block visibility (`occluder_bvh`)
+    occluders: object = None  # CompiledScene of the surfaces that may block visibility (`solve.occluder_bvh`)
     inherited: np.ndarray | None = None  # int64 (n_elements,): an element's index at the previous level where it
     # is the same element (its polygon was not cut), else -1
     columns: object = None  # the previous level's `Result.columns`
@@ -383,10 +383,10 @@ SHOT_SLACK = 0.05
 
 def _conserving(ff: np.ndarray, recv_area: np.ndarray, src_area: np.ndarray) -> np.ndarray:
     """The scale of each shooter's form factors F_ij (receiver i, shooter q): 1, or less where needed so that
-    what its receivers take, Σ_i A_i·F_ij = A_j·Σ_i F_ji, is at most (1 + SHOT_SLACK)·A_j: with exact form factors it
-    is at most A_j, but a form factor taken at a receiver's centre overestimates what a large receiver close
-    to a small shooter takes (neighbouring triangles of a mesh at a crease), and a shot that sends more
-    power than it has makes progressive refinement diverge."""
+    what its receivers take, Σ_i A_i·F_ij = A_j·Σ_i F_ji, is at most (1 + SHOT_SLACK)·A_j: with exact form
+    factors it is at most A_j, but a form factor taken at a receiver's centre overestimates what a large
+    receiver close to a small shooter takes (neighbouring triangles of a mesh at a crease), and a shot that
+    sends more power than it has makes progressive refinement diverge."""
     sent = recv_area @ ff
     bound = (1.0 + SHOT_SLACK) * src_area
     return np.where(sent > bound, bound / np.maximum(sent, 1e-300), 1.0)
