@@ -120,6 +120,32 @@ def test_any_hit_equals_brute_force(mixed, rng):
     assert np.array_equal(got[clear], want[clear])
 
 
+def test_any_triangle_hit_equals_any_hit_on_a_tree_of_triangles(rng):
+    """`any_triangle_hit`, the traversal compiled without the analytic shapes (radiosity's visibility rays over
+    its trees of triangles), answers as `any_hit` does, and as brute force, on a tree of triangles only."""
+    from conftest import geometry
+
+    from lumos.compile import triangle_arrays
+    from lumos.kernels.traverse import any_hit, any_triangle_hit
+
+    centers = rng.uniform(-4.5, 4.5, (200, 1, 3))
+    tris = _f32(centers + rng.normal(scale=0.5, size=(200, 3, 3)))
+    compiled = triangle_arrays(tris.reshape(-1, 9), np.arange(200, dtype=np.int32))
+    geo = geometry(compiled.arrays)
+    stack = np.empty(64, np.int64)
+    o = rng.uniform(-6, 6, (300, 3))
+    d = rng.normal(size=(300, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    t_max = rng.uniform(0.5, 12.0, 300)
+    best = np.min([hit_triangle(o, d, *tri)[0] for tri in tris], axis=0)
+    want = best < t_max
+    clear = ~(np.abs(best - t_max) <= 1e-9 * t_max)
+    got = np.array([any_triangle_hit(geo, tuple(o[i]), tuple(d[i]), 0.0, t_max[i], stack) for i in range(300)])
+    general = np.array([any_hit(geo, tuple(o[i]), tuple(d[i]), 0.0, t_max[i], stack, 0.0) for i in range(300)])
+    assert 0.1 < want.mean() < 0.9
+    assert np.array_equal(got, general) and np.array_equal(got[clear], want[clear])
+
+
 def test_closest_hit_respects_t_max(mixed):
     _, _, compiled, o, d, t_all, _ = mixed
     best = t_all.min(axis=0)

@@ -27,7 +27,7 @@ from .. import config
 from .jit import njit_inline
 from .rng import rand2_key
 from .sampling import stratified_2d
-from .traverse import any_hit
+from .traverse import any_triangle_hit
 
 _INV_2PI = 0.5 / math.pi
 #: The clipping plane sits this far above x (relative to the polygon's size) so a polygon touching x's plane
@@ -207,7 +207,7 @@ def visibility(geo, x, n, corners, k, n_poly, samples, key, stack):
         w = cos_x * cos_y / d2
         total += w
         rays += 1
-        if not any_hit(geo, x, (wx, wy, wz), 0.0, d * (1.0 - config.RAY_EPSILON), stack, 0.0):
+        if not any_triangle_hit(geo, x, (wx, wy, wz), 0.0, d * (1.0 - config.RAY_EPSILON), stack):
             seen += w
     if not total > 0.0:
         return 0.0, rays

@@ -28,7 +28,7 @@ from .layout import LIGHT_DIRECTIONAL, LV_DIFFUSE
 from .rng import rand2_key, rand_key, sample_key
 from .sampling import stratified_2d, turn
 from .surface import offset_origin
-from .traverse import any_hit, closest_hit
+from .traverse import any_triangle_hit, closest_hit
 from .views import geometry_of, lighting_of
 
 _CHUNK = 256
@@ -98,7 +98,7 @@ def _sky_chunks(sa, sky, pa, samples, seed, out, rays_out, c0, c1, stack):
                     if cos <= 0.0 or (strategy == 0 and not pdf > 0.0):
                         continue
                     rays += 1
-                    if any_hit(geo, offset_origin(p, nrm, d, _LIFT), d, 0.0, math.inf, stack, 0.0):
+                    if any_triangle_hit(geo, offset_origin(p, nrm, d, _LIFT), d, 0.0, math.inf, stack):
                         continue
                     le = env_radiance(sky, d)
                     k = cos / ((pdf + cos / math.pi) * samples * math.pi)
@@ -136,7 +136,7 @@ def _direct_chunks(sa, lights_sa, pa, samples, seed, out, rays_out, c0, c1, stac
                         continue
                     origin = offset_origin(p, nrm, L, _LIFT)
                     rays += 1
-                    if any_hit(geo, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack, 0.0):
+                    if any_triangle_hit(geo, origin, L, 0.0, dist * (1.0 - config.RAY_EPSILON), stack):
                         continue
                     k = cos * w / samples
                     r += lit.light_vecs[j, LV_DIFFUSE, 0] * k

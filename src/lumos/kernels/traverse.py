@@ -207,7 +207,16 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
 def any_hit(geo, o, d, t_min, t_max, stack, time):
     """True if anything lies on the ray with t_min < t < t_max (hit testing; shadow rays use `transmittance`,
     which lets light through transparent objects)."""
-    rgb, settled = _pass_through(geo, None, None, o, d, t_min, t_max, stack, time)
+    rgb, settled = _pass_through(geo, None, None, o, d, t_min, t_max, stack, time, geo)
+    return rgb[0] == 0.0
+
+
+@njit_inline
+def any_triangle_hit(geo, o, d, t_min, t_max, stack):
+    """`any_hit` for a tree of triangles only (`compile.triangle_arrays`: radiosity's patches and occluders): the
+    same traversal compiled without the analytic shapes' tests (spheres to csg objects), which such a tree never
+    reaches."""
+    rgb, settled = _pass_through(geo, None, None, o, d, t_min, t_max, stack, 0.0, None)
     return rgb[0] == 0.0
 
 
@@ -220,7 +229,7 @@ def transmittance(geo, tri_info, materials, o, d, t_max, stack, time):
     primitive. settled is False when a primitive only the hit-by-hit walk can count is on the ray (see
     `illumination.shadow_transmittance`), among them an opacity cut-out (`kernels.cutout`: its triangles' factor
     is NaN, which no later factor undoes). `tri_info` and `materials` are the triangles' and materials' arrays."""
-    rgb, settled = _pass_through(geo, tri_info, materials, o, d, 0.0, t_max, stack, time)
+    rgb, settled = _pass_through(geo, tri_info, materials, o, d, 0.0, t_max, stack, time, geo)
     return rgb, settled and rgb[0] == rgb[0]
 
 
@@ -283,7 +292,8 @@ _ON, _BLOCKED, _UNSETTLED = 0, 1, 2
 
 
 @njit_inline
-def _leaf_through(geo, tri_info, materials, first, count, o, d, t_min, t_max, setup, okx, oky, okz, time, tr, tg, tb):
+def _leaf_through(geo, tri_info, materials, first, count, o, d, t_min, t_max, setup, okx, oky, okz, time, tr, tg, tb,
+                  shaped):
     """`_pass_through`'s test of one leaf (first, count) (`leaf_of`): (tr, tg, tb) times what its primitives on
     the ray let through, and `_ON`, `_BLOCKED` (the product is as good as 0) or `_UNSETTLED`."""
     kx, ky, kz, sx, sy, sz = setup
@@ -306,10 +316,12 @@ def _leaf_through(geo, tri_info, materials, first, count, o, d, t_min, t_max, se
             if t <= t_min:
                 continue
             f0, f1, f2 = _triangle_factor(tri_info, materials, r)
-        else:
-            f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(~r), o, d, t_min, t_max, time)
+        elif shaped is not None:
+            f0, f1, f2, settled = _shape_factor(shaped, materials, np.int64(~r), o, d, t_min, t_max, time)
             if not settled:
                 return tr, tg, tb, _UNSETTLED
+        else:
+            continue
         tr, tg, tb = tr * f0, tg * f1, tb * f2
         if max(tr, tg, tb) < SHADOW_CUTOFF:
             return tr, tg, tb, _BLOCKED
@@ -317,19 +329,23 @@ def _leaf_through(geo, tri_info, materials, first, count, o, d, t_min, t_max, se
 
 
 @njit_inline
-def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
+def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time, shaped):
     """The traversal behind `transmittance` and `any_hit`: every primitive on the ray with t_min < t < t_max, in
     traversal order, multiplied in; it stops as soon as the product is (as good as) 0. ((r, g, b), settled).
     The leaves among a node's children are tested where they are found, and only its interior children go on
-    the stack (the order does not matter: the product is the same)."""
+    the stack (the order does not matter: the product is the same). `shaped` is `geo` where the tree may hold
+    analytic shapes, and None where it holds triangles only (`any_triangle_hit`): Numba then prunes the shapes'
+    branches before typing them, and compiles the triangles' tests alone."""
     tr, tg, tb = 1.0, 1.0, 1.0
-    for k in range(geo.unbounded.shape[0]):
-        f0, f1, f2, settled = _shape_factor(geo, materials, np.int64(geo.unbounded[k]), o, d, t_min, t_max, time)
-        if not settled:
-            return (tr, tg, tb), False
-        tr, tg, tb = tr * f0, tg * f1, tb * f2
-        if max(tr, tg, tb) < SHADOW_CUTOFF:
-            return (0.0, 0.0, 0.0), True
+    if shaped is not None:
+        for k in range(shaped.unbounded.shape[0]):
+            f0, f1, f2, settled = _shape_factor(shaped, materials, np.int64(shaped.unbounded[k]), o, d, t_min, t_max,
+                                                time)
+            if not settled:
+                return (tr, tg, tb), False
+            tr, tg, tb = tr * f0, tg * f1, tb * f2
+            if max(tr, tg, tb) < SHADOW_CUTOFF:
+                return (0.0, 0.0, 0.0), True
     nodes = geo.wide_nodes
     link = geo.wide_link
     if nodes.shape[0] == 0:
@@ -353,7 +369,7 @@ def _pass_through(geo, tri_info, materials, o, d, t_min, t_max, stack, time):
                 sp += 1
                 continue
             tr, tg, tb, status = _leaf_through(geo, tri_info, materials, np.int64(link[node, WIDE_CHILD + k]), count,
-                                               o, d, t_min, t_max, setup, okx, oky, okz, time, tr, tg, tb)
+                                               o, d, t_min, t_max, setup, okx, oky, okz, time, tr, tg, tb, shaped)
             if status == _BLOCKED:
                 return (0.0, 0.0, 0.0), True
             if status == _UNSETTLED:
