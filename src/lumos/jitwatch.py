@@ -22,9 +22,9 @@ from typing import Callable, Iterator, Optional
 from numba.core import event
 
 #: About how long a first run compiles every kernel of a method, the BVH build included, on one of two cores
-#: (a first render on a fresh cache, its `jit_s`: BENCHMARKS.md, 2026-12-05, sixth session), when no warm-up has
-#: measured it on this machine.
-ESTIMATE_S = {"raycast": 17, "raster": 19, "whitted": 25, "path": 25, "radiosity": 16}
+#: (a first render on a fresh cache, its `jit_s`: BENCHMARKS.md, 2026-12-05, sixth and seventh sessions), when no
+#: warm-up has measured it on this machine.
+ESTIMATE_S = {"raycast": 17, "raster": 19, "whitted": 25, "path": 25, "radiosity": 11}
 
 
 #: the file beside the kernels where `lumos warmup` keeps what each kernel family took to compile

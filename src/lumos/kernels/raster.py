@@ -239,7 +239,8 @@ def raster_bands(bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, 
     Opacity cut-outs: a polygon whose material (materials[prim_material[prim]], float64 (nm, MAT_SIZE); int32
     (n_prims,)) has MAT_CUTOUT set writes no sample where its α (`texture.is_hole`, `tex` a view with tex_info and
     tex_pixels) at the interpolated (u, v) of attrs columns uv_at, uv_at + 1 is a hole, so what lies behind it
-    stays in the buffers. uv_at −1: no cut-outs (the materials are not read)."""
+    stays in the buffers. uv_at −1: no cut-outs (the materials are not read); `tex` None: none ever (the test is
+    not compiled)."""
     for band in range(b0, b1):
         raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, attrs, near, ortho, persp,
                     width, height, jx, jy, row_lo, row_hi, mode, zbuf, ids, gbuf, count, tex, materials,
@@ -304,7 +305,7 @@ def raster_band(band, bins, bin_prims_, prim_start, prim_index, clip, screen, at
                 F[i, 1] = q
                 for a in range(K):
                     F[i, 2 + a] = attrs[v, a] * q
-        if uv_at >= 0 and materials[prim_material[prim], MAT_CUTOUT] != 0.0:
+        if tex is not None and uv_at >= 0 and materials[prim_material[prim], MAT_CUTOUT] != 0.0:
             fill_polygon(ne, edges, nx, F, r, r1, width, jx, jy, prim, zbuf, ids, gbuf,
                          (tex, materials[prim_material[prim]], uv_at))
         else:

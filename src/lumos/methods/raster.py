@@ -356,9 +356,13 @@ class Rasterizer:
 
     def __init__(self, mesh, attrs, camera, width, height, cull=False, persp=True, cutouts=None):
         """`cutouts`: None, or (scene arrays, uv_at) to discard the samples of polygons whose material has an
-        opacity cut-out where their (u, v), attributes uv_at and uv_at + 1, fall in a hole."""
+        opacity cut-out where their (u, v), attributes uv_at and uv_at + 1, fall in a hole; False for a mesh that
+        never has any (a radiosity solution's display), whose scan conversion is compiled without the test (the
+        texture lookups behind it: a second of a first radiosity render's compile)."""
         self.mesh = mesh
-        if cutouts is None:
+        if cutouts is False:
+            self.cutouts = (None, np.zeros((1, MAT_SIZE)), np.zeros(1, np.int32), np.int64(-1))
+        elif cutouts is None:
             self.cutouts = (_NO_TEXTURES, np.zeros((1, MAT_SIZE)), np.zeros(1, np.int32), np.int64(-1))
         else:
             sa, uv_at = cutouts
@@ -572,7 +576,8 @@ def draw_colours(positions, normals, faces, vertex_colour, face_colour, face_alb
     attrs[:, G_POS:G_POS + 3] = positions
     attrs[:, G_NORMAL:G_NORMAL + 3] = normals
     attrs[:, G_COLOUR:G_COLOUR + 3] = vertex_colour
-    raster = Rasterizer(mesh, attrs, camera, width, height, cull=True, persp=settings.perspective_correct)
+    raster = Rasterizer(mesh, attrs, camera, width, height, cull=True, persp=settings.perspective_correct,
+                        cutouts=False)
     cam_vecs, _ = camera_arrays(camera)
     radiance = np.zeros((height, width, 3), np.float32)
     want_aovs = bool(settings.aov)
