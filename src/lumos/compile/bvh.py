@@ -88,6 +88,9 @@ def wide_nodes(node_box: np.ndarray, node_link: np.ndarray):
     from ..kernels.bvh_build import collapse_wide
     from ..kernels.layout import NODE_COUNT, NODE_FIRST, WIDE, WIDE_CHILD, WIDE_COUNT, WIDE_SIZE
 
+    if len(node_box) == 0:  # an empty tree: no kernel to run (or to compile, on a first run)
+        packed = aligned_zeros((0, WIDE_SIZE), np.float32)
+        return packed, packed.view(np.int32)
     boxes, child, count = collapse_wide(node_box, node_link, NODE_FIRST, NODE_COUNT)
     n = len(boxes)
     packed = aligned_zeros((n, WIDE_SIZE), np.float32)
@@ -108,6 +111,8 @@ def packed_leaves(wide_link: np.ndarray, prim_ref: np.ndarray, tri_verts: np.nda
     from ..kernels.layout import LEAF_BASE, LEAF_FACE, LEAF_MASK, LEAF_OBJECT, LEAF_UVS, WIDE, WIDE_CHILD, WIDE_COUNT
 
     packed = aligned_zeros((WIDE * len(wide_link), 48), np.float32)  # room for every slot; pages untouched stay free
+    if len(wide_link) == 0:  # an empty tree
+        return packed, packed.view(np.int32)
     n = pack_leaves(wide_link, WIDE_CHILD, WIDE_COUNT, prim_ref, tri_verts, packed, packed.view(np.int32),
                     LEAF_BASE, LEAF_MASK, np.ascontiguousarray(tri_object, np.int32),
                     np.ascontiguousarray(tri_face, np.int32), np.ascontiguousarray(tri_uvs, np.bool_),
