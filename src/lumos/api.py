@@ -97,6 +97,42 @@ def entry_point(name: str) -> Callable:
     return getattr(importlib.import_module(module), func)
 
 
+#: The methods whose first run compiles its kernels while a process of its own compiles the BVH build's
+#: (`compile_beside_bvh`; raster only with shadow rays, which need the tree); radiosity builds its trees in its
+#: solve, whose kernels wait on them.
+BESIDE_BVH = ("raycast", "raster", "whitted", "path")
+
+
+def compile_beside_bvh(scene, cfg) -> None:
+    """On a first run with nothing compiled (the BVH build's kernels not in the cache), compile the method's
+    kernels while a `lumos warmup --methods bvh` process compiles the BVH build's on another core. The kernels
+    need the scene's array types, not its tree, so they compile against the scene compiled with an empty one
+    (`compile_for(..., tree=False)`), rendered at 2×2 and thrown away; the compile that follows loads the BVH
+    build's kernels, and the render finds its own compiled (BENCHMARKS.md, 2026-12-05, seventh session)."""
+    import os
+    import subprocess
+
+    from .kernels.bvh_build import build_nodes
+    from .kernels.cache import has_entries
+    from .methods import compile_for
+
+    if (os.cpu_count() or 1) < 2 or has_entries(build_nodes):
+        return
+    try:
+        helper = subprocess.Popen([sys.executable, "-m", "lumos", "warmup", "--methods", "bvh", "--jobs", "1",
+                                   "--quiet"], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.DEVNULL)
+    except OSError:  # no process to be had here: the BVH build compiles in this one, as it would have
+        return
+    try:
+        small = cfg.model_copy(update={"width": 2, "height": 2})
+        entry_point(cfg.method)(compile_for(scene, small, tree=False), scene.camera, small)
+    except Exception:  # (a scene the real compile refuses: it says why, below; a kernel not compiled here, it compiles)
+        pass
+    finally:
+        helper.wait()
+
+
 def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] = False,
            on_pass: Optional[Callable[["Image"], None]] = None, solution=None, client=None,
            checkpoint: Optional[str] = None, resume: bool = False, live: Any = None, **settings) -> "Image":
@@ -147,6 +183,9 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
                   "next runs; `lumos warmup` compiles them all ahead)", file=sys.stderr, flush=True)
 
     with watch_compiles(on_first=say_compiling) as watch:
+        if (cfg.method in BESIDE_BVH and (cfg.method != "raster" or cfg.shadows) and solution is None
+                and client is None and checkpoint is None):
+            compile_beside_bvh(scene, cfg)
         try:
             compiled = compile_for(scene, cfg, solved=solution is not None)
         except LumosError as exc:  # the compile step knows the key path, not the file: name it

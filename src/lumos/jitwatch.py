@@ -21,10 +21,11 @@ from typing import Callable, Iterator, Optional
 
 from numba.core import event
 
-#: About how long a first run compiles every kernel of a method, the BVH build included, on one of two cores
-#: (a first render on a fresh cache, its `jit_s`: BENCHMARKS.md, 2026-12-05, sixth and seventh sessions), when no
-#: warm-up has measured it on this machine.
-ESTIMATE_S = {"raycast": 17, "raster": 19, "whitted": 25, "path": 25, "radiosity": 11}
+#: About how long a first run compiles every kernel of a method on one of two cores (a first render on a fresh
+#: cache, its `jit_s`: BENCHMARKS.md, 2026-12-05, seventh session), when no warm-up has measured it on this
+#: machine; raycast, whitted, path and raster with shadows compile the BVH build's kernels on the other core
+#: meanwhile (`api.compile_beside_bvh`), radiosity in its own process.
+ESTIMATE_S = {"raycast": 12, "raster": 18, "whitted": 19, "path": 19, "radiosity": 11}
 
 
 #: the file beside the kernels where `lumos warmup` keeps what each kernel family took to compile

@@ -258,10 +258,12 @@ def spot_cos(degrees: float) -> float:
     return 0.0 if degrees == 90.0 else float(np.cos(np.radians(degrees)))
 
 
-def compile_scene(scene, reuse: Optional[CompiledScene] = None) -> CompiledScene:
+def compile_scene(scene, reuse: Optional[CompiledScene] = None, tree: bool = True) -> CompiledScene:
     """Flatten a validated `Scene` into `SceneArrays` (analytic shapes as themselves, meshes as triangles) and
     build its BVH; with `reuse` (an earlier compile) its BVH is taken as it is when the primitives' bounds are
-    the same to the bit (an edit of materials or lights only: the live preview), and `bvh_build_s` is 0."""
+    the same to the bit (an edit of materials or lights only: the live preview), and `bvh_build_s` is 0. With
+    `tree` False the BVH is an empty one, and the triangles with it: arrays of the same types that hold nothing
+    to hit (what a first run compiles the methods' kernels against while the BVH build's compile elsewhere)."""
     materials = _Materials(environment_lights_model(scene))
     shapes = _Shapes(scene.camera.shutter)
     tri_parts = []  # (verts, normals, uvs, material, object)
@@ -290,7 +292,7 @@ def compile_scene(scene, reuse: Optional[CompiledScene] = None) -> CompiledScene
     lights = _lights(scene, materials, emitters)
     for kind, m, mat, i in emitters:
         shapes.add(kind, m, mat, len(scene.objects) + i, light=i)
-    return _assemble(scene, materials, shapes, tri_parts, lights, names, reuse)
+    return _assemble(scene, materials, shapes, tri_parts, lights, names, reuse, tree)
 
 
 def environment_lights_model(scene) -> bool:
@@ -331,10 +333,10 @@ def _material_names(scene, materials: _Materials) -> list[str]:
     return [names.get(id(m), "(default)" if m is not None else "(light)") for m in materials.materials]
 
 
-def compile_raster(scene, tessellation: int, shadows: bool) -> CompiledScene:
+def compile_raster(scene, tessellation: int, shadows: bool, tree: bool = True) -> CompiledScene:
     """The scene for scan conversion: its objects as polygons (`CompiledScene.raster`, shapes tessellated with
     `tessellation` segments) and, for the optional shadow rays (`shadows`), a BVH over those same polygons
-    instead of the analytic shapes."""
+    instead of the analytic shapes (`tree`: as `compile_scene`'s)."""
     materials = _Materials(environment_lights_model(scene))
     names = [obj.name or f"{obj.type}#{i}" for i, obj in enumerate(scene.objects)]
     object_materials = [materials.add(scene.material_of(obj), one_sided=not obj.two_sided) for obj in scene.objects]
@@ -352,12 +354,12 @@ def compile_raster(scene, tessellation: int, shadows: bool) -> CompiledScene:
         for mat, obj in {(int(a), int(b)) for a, b in info[:, :2]}:
             sel = (info[:, 0] == mat) & (info[:, 1] == obj)
             tri_parts.append((verts[sel], None, uvs[sel], mat, obj))
-    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names)
+    compiled = _assemble(scene, materials, _Shapes(), tri_parts, lights, names, tree=tree)
     compiled.raster = mesh
     return compiled
 
 
-def _assemble(scene, materials, shapes, tri_parts, lights, names, reuse=None) -> CompiledScene:
+def _assemble(scene, materials, shapes, tri_parts, lights, names, reuse=None, tree=True) -> CompiledScene:
     light_kind, light_samples, light_vecs, light_scalars = lights
     tri_verts, tri_normals, tri_uvs, tri_info, tri_tangents = _concat_triangles(tri_parts)
     n_tri, n_shape = len(tri_verts), len(shapes.infos)
@@ -385,7 +387,10 @@ def _assemble(scene, materials, shapes, tri_parts, lights, names, reuse=None) ->
     for k, s in enumerate(bounded):
         prim_bounds[n_tri + k] = shapes.bounds[s]
     key = hashlib.sha256(prim_bounds.tobytes() + str(n_tri).encode()).hexdigest()
-    if reuse is not None and reuse.bvh is not None and reuse.bvh[0] == key:
+    if not tree:  # an empty tree over nothing: the leaf order below then keeps no triangle either
+        node_box, node_link, order, depth = build(prim_bounds[:0])
+        build_s = 0.0
+    elif reuse is not None and reuse.bvh is not None and reuse.bvh[0] == key:
         node_box, node_link, order, depth = (a.copy() if isinstance(a, np.ndarray) else a for a in reuse.bvh[1])
         build_s = 0.0
     else:

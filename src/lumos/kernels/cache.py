@@ -382,6 +382,14 @@ class OverloadCache(KernelCache):
             pass
 
 
+def has_entries(dispatcher) -> bool:
+    """Whether a cache folder holds entries of `dispatcher` for its sources as they are (compiled before, for
+    some signature): a quick test that a first run is cold, which reads the index and no entry. True when Numba
+    compiles nothing (NUMBA_DISABLE_JIT: the kernels are Python functions)."""
+    cache = getattr(dispatcher, "_cache", None)
+    return cache is None or any(f._load_index() for f in cache._index_files())
+
+
 def cached(dispatcher, prefix: str = "", library_class=None, cache_class=KernelCache):
     """Give a Numba dispatcher (compiled with `cache=False`) a `KernelCache` (or `cache_class`); `prefix` names
     its entries apart from another dispatcher's of the same function (Numba's index keys leave the compile
