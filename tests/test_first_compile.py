@@ -55,7 +55,7 @@ def test_a_cold_first_render_compiles_beside_the_bvh_build(monkeypatch):
         def __init__(self, args, **kwargs):
             started.append(args)
 
-        def wait(self):
+        def wait(self, timeout=None):
             return 0
 
     compile_for = methods.compile_for

@@ -127,10 +127,13 @@ def compile_beside_bvh(scene, cfg) -> None:
     try:
         small = cfg.model_copy(update={"width": 2, "height": 2})
         entry_point(cfg.method)(compile_for(scene, small, tree=False), scene.camera, small)
-    except Exception:  # (a scene the real compile refuses: it says why, below; a kernel not compiled here, it compiles)
+    except Exception:  # a scene the real compile refuses says why there; a kernel not compiled here compiles there
         pass
     finally:
-        helper.wait()
+        try:
+            helper.wait(timeout=600)
+        except subprocess.TimeoutExpired:  # (never seen: the BVH build's compile takes seconds)
+            helper.kill()
 
 
 def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] = False,

@@ -263,7 +263,8 @@ def compile_scene(scene, reuse: Optional[CompiledScene] = None, tree: bool = Tru
     build its BVH; with `reuse` (an earlier compile) its BVH is taken as it is when the primitives' bounds are
     the same to the bit (an edit of materials or lights only: the live preview), and `bvh_build_s` is 0. With
     `tree` False the BVH is an empty one, and the triangles with it: arrays of the same types that hold nothing
-    to hit (what a first run compiles the methods' kernels against while the BVH build's compile elsewhere)."""
+    to hit (what a first run compiles the methods' kernels against while the BVH build's kernels compile
+    elsewhere: `api.compile_beside_bvh`)."""
     materials = _Materials(environment_lights_model(scene))
     shapes = _Shapes(scene.camera.shutter)
     tri_parts = []  # (verts, normals, uvs, material, object)
