@@ -64,9 +64,9 @@ from .layout import (
 )
 from .rng import rand01
 from .sampling import concentric_disk, stratified_2d, turn
-from .surface import offset_origin, surface_at
+from .surface import offset_origin, surface_at_of
 from .texture import is_hole, lighting_textures
-from .traverse import SHADOW_CUTOFF, closest_hit, transmittance
+from .traverse import SHADOW_CUTOFF, closest_hit_of, transmittance_of
 from .vec import dot, length, madd, mul, normalize, orthonormal_basis, row3, sub
 
 _INV_PI = 1.0 / math.pi
@@ -272,13 +272,13 @@ def illuminate_coeffs(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, see
     """The classic model with the coefficients given as (r, g, b) tuples (a textured surface's vary per point):
     the sum of `illuminate_terms`. Returns ((r, g, b), shadow rays traced)."""
     a, d, s, rays = illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample,
-                                     shadows, stack, stack_t, time, lit.light_scalars, -1)
+                                     shadows, stack, stack_t, time, lit.light_scalars, -1, geo)
     return (a[0] + d[0] + s[0], a[1] + d[1] + s[1], a[2] + d[2] + s[2]), rays
 
 
 @njit_inline
 def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed, pixel, sample, shadows, stack,
-                     stack_t, time, per_light, log_base):
+                     stack_t, time, per_light, log_base, shaped):
     """The classic model's three terms apart: (ambient Ka·Ia, diffuse Σ Kd·Id·(N·L), specular Σ Ks·Is·(R·V)^n,
     shadow rays traced), each term an (r, g, b) tuple, each light's share multiplied by its shadow transmittance.
 
@@ -290,6 +290,8 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
     light j's share (`lumos.explain`; with −1, any float64 2-D array, never touched): PL_DIFFUSE, PL_SPECULAR (rgb, shadowed), PL_SHADOW (the mean transmittance of its
     samples, 0 for samples behind the surface), PL_COS (the mean N·L over its samples), PL_LIT (how many of its
     samples face the surface and are not blocked), PL_SPOT (spot lights: the falloff of their cone towards p).
+    `shaped`: `geo`, or None for a scene of triangles only (raster's polygons), whose shadow rays are then
+    compiled without the analytic shapes' tests (`shadow_transmittance`).
     """
     log = log_base >= 0
     if log:  # (element by element: a device function makes no array views, see kernels.jit)
@@ -322,7 +324,8 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
             if shadows:
                 origin = offset_origin(p, n_geo, L, config.RAY_EPSILON)
                 (tr, tg, tb), extra = shadow_transmittance(geo, surf, lit, origin, L,
-                                                           dist * (1.0 - config.RAY_EPSILON), stack, stack_t, time)
+                                                           dist * (1.0 - config.RAY_EPSILON), stack, stack_t, time,
+                                                           shaped)
                 rays += extra
             if log:
                 per_light[log_base + j, PL_SHADOW] += tr * inv_n
@@ -368,17 +371,19 @@ def is_solid(surf, ref):
 
 
 @njit_inline
-def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
+def shadow_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time, shaped):
     """What reaches `origin` from a light at `dist` along L: (rgb factor, rays traced). Opaque objects (kt = 0)
     block; a transparent object multiplies by its kt each time the ray enters it if it is a solid, each time
-    the ray crosses it if it is a surface (DESIGN.md §3: once per transparent object passed through)."""
+    the ray crosses it if it is a surface (DESIGN.md §3: once per transparent object passed through). `shaped`:
+    `geo`, or None for a scene of triangles only (raster's polygons), whose analytic shapes' tests are then not
+    compiled (`traverse._pass_through`)."""
     # one any-order traversal settles a shadow ray unless a csg object or an open cylinder or cone that lets
     # light through, or a surface with an opacity cut-out, is on it: nothing in the way, an opaque occluder, or transparent triangles, planes and
     # convex solids, each counted once
-    rgb, settled = transmittance(geo, surf.tri_info, lit.materials, origin, L, dist, stack, time)
+    rgb, settled = transmittance_of(geo, shaped, surf.tri_info, lit.materials, origin, L, dist, stack, time)
     if settled:
         return rgb, 1
-    rgb, rays = walk_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time)
+    rgb, rays = walk_transmittance_of(geo, shaped, surf, lit, origin, L, dist, stack, stack_t, time)
     return rgb, rays + 1
 
 
@@ -387,17 +392,28 @@ def walk_transmittance(geo, surf, lit, origin, L, dist, stack, stack_t, time):
     """`shadow_transmittance` hit by hit, in order along the ray, one closest-hit traversal each: (rgb factor,
     rays traced). It handles every kind of surface (a csg object may be entered several times) and the holes of
     opacity cut-outs (`kernels.cutout`), and is the slow twin that `traverse.transmittance` is tested against."""
+    return walk_transmittance_of(geo, geo, surf, lit, origin, L, dist, stack, stack_t, time)
+
+
+@njit
+def walk_transmittance_of(geo, shaped, surf, lit, origin, L, dist, stack, stack_t, time):
+    """`walk_transmittance`, with `shaped` `geo`, or None for a scene of triangles only."""
     tr, tg, tb = 1.0, 1.0, 1.0
     o = origin
     t_max = dist
     rays = 0
     for _ in range(MAX_SHADOW_CROSSINGS):
         rays += 1
-        hit = closest_hit(geo, o, L, 0.0, t_max, stack, stack_t, time)
+        hit = closest_hit_of(geo, shaped, o, L, 0.0, t_max, stack, stack_t, time)
         t = hit[0]
         if t < 0.0:
             return (tr, tg, tb), rays
-        p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at(surf, o, L, t, hit[1], hit[2], hit[3], hit[4], time)
+        if shaped is None:
+            p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at_of(surf, None, o, L, t, hit[1], hit[2], hit[3],
+                                                                     hit[4], time)
+        else:
+            p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at_of(surf, surf, o, L, t, hit[1], hit[2], hit[3],
+                                                                     hit[4], time)
         mat = lit.materials[mat_id]
         if light >= 0:  # the emitting surface of an area light is not an occluder
             pass

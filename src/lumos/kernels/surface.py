@@ -78,8 +78,15 @@ def surface_at(surf, o, d, t, ref, b1, b2, part, time):
     Normals are unit length and not yet turned towards the viewer (see `face_forward`). (u, v) is (0, 0) on the
     curved shapes whose material reads no uv (`FLAG_READS_UV`).
     """
+    return surface_at_of(surf, surf, o, d, t, ref, b1, b2, part, time)
+
+
+@njit_inline
+def surface_at_of(surf, shaped, o, d, t, ref, b1, b2, part, time):
+    """`surface_at`, with `shaped` `surf` where the hit may be an analytic shape's and None where the scene is
+    triangles only (raster's polygons): Numba then prunes the shapes' branch before typing it."""
     p = madd(o, d, t)
-    if ref >= 0:
+    if ref >= 0 or shaped is None:
         v = surf.tri_verts
         # np.float64, not float(): Numba's float() keeps a float32 a float32, and the edges and normal would be
         # computed in single precision

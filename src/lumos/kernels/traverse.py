@@ -109,6 +109,7 @@ def _lane(x0, x1, x2, x3, k):
 @njit_inline
 def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     """Nearest intersection with t_min < t < t_max at shutter time `time`; `geo` is a `layout.Geometry`.
+    `closest_hit_of` with the shapes' tests compiled in.
 
     Returns (t, ref, b1, b2, part): ref is a triangle index (>= 0) or ~shape index (< 0); b1, b2 are the
     barycentrics of a triangle hit, part the face of a shape hit (csg hits: see `kernels.csg`) and, for a
@@ -117,17 +118,25 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
     stack (int64) and stack_t (float64) are the caller's, of equal length (`config.BVH_STACK`); the top WIDE
     entries of stack_t hold the entry distances of the node just tested, so the walk itself stays below them.
     """
+    return closest_hit_of(geo, geo, o, d, t_min, t_max, stack, stack_t, time)
+
+
+@njit_inline
+def closest_hit_of(geo, shaped, o, d, t_min, t_max, stack, stack_t, time):
+    """`closest_hit`, with `shaped` `geo` where the tree may hold analytic shapes and None where it holds
+    triangles only (raster's polygons): Numba then prunes the shapes' tests before typing them."""
     best_t = t_max
     best_ref = 0
     best_b1 = 0.0
     best_b2 = 0.0
     best_part = 0
     hit = False
-    for k in range(geo.unbounded.shape[0]):
-        s = np.int64(geo.unbounded[k])
-        t, part, b1, b2 = _shape_hit(geo, s, o, d, t_min, best_t, time)
-        if t != NO_HIT:
-            best_t, best_ref, best_b1, best_b2, best_part, hit = t, ~s, b1, b2, part, True
+    if shaped is not None:
+        for k in range(shaped.unbounded.shape[0]):
+            s = np.int64(shaped.unbounded[k])
+            t, part, b1, b2 = _shape_hit(shaped, s, o, d, t_min, best_t, time)
+            if t != NO_HIT:
+                best_t, best_ref, best_b1, best_b2, best_part, hit = t, ~s, b1, b2, part, True
     nodes = geo.wide_nodes
     link = geo.wide_link
     if nodes.shape[0] > 0:
@@ -184,8 +193,8 @@ def closest_hit(geo, o, d, t_min, t_max, stack, stack_t, time):
                         t, b1, b2 = intersect_triangle(o, setup, geo.tri_verts, r, best_t)
                         if t > t_min:
                             best_t, best_ref, best_b1, best_b2, best_part, hit = t, r, b1, b2, -1, True
-                    else:
-                        t, part, b1, b2 = _shape_hit(geo, np.int64(~r), o, d, t_min, best_t, time)
+                    elif shaped is not None:
+                        t, part, b1, b2 = _shape_hit(shaped, np.int64(~r), o, d, t_min, best_t, time)
                         if t != NO_HIT:
                             best_t, best_ref, best_b1, best_b2, best_part, hit = t, r, b1, b2, part, True
             # pop the next node that may still hold a closer hit
@@ -229,7 +238,13 @@ def transmittance(geo, tri_info, materials, o, d, t_max, stack, time):
     primitive. settled is False when a primitive only the hit-by-hit walk can count is on the ray (see
     `illumination.shadow_transmittance`), among them an opacity cut-out (`kernels.cutout`: its triangles' factor
     is NaN, which no later factor undoes). `tri_info` and `materials` are the triangles' and materials' arrays."""
-    rgb, settled = _pass_through(geo, tri_info, materials, o, d, 0.0, t_max, stack, time, geo)
+    return transmittance_of(geo, geo, tri_info, materials, o, d, t_max, stack, time)
+
+
+@njit_inline
+def transmittance_of(geo, shaped, tri_info, materials, o, d, t_max, stack, time):
+    """`transmittance`, with `shaped` `geo`, or None for a tree of triangles only (`_pass_through`)."""
+    rgb, settled = _pass_through(geo, tri_info, materials, o, d, 0.0, t_max, stack, time, shaped)
     return rgb, settled and rgb[0] == rgb[0]
 
 

@@ -275,7 +275,7 @@ def _shade_band(sa, bg, ids, gbuf, uv_at, light_at, prim_info, prim_normal, prim
                     key, smp, log = y * width + x, sample, light_log
                     log_row = 0 if x == explain[0] and y == explain[1] else -1
                 a, d, sp, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ca, cd, cs, shininess, seed, key,
-                                                   smp, shadows, stack, stack_t, 0.0, log, log_row)
+                                                   smp, shadows, stack, stack_t, 0.0, log, log_row, None)
                 rays += extra
                 if vertex_stage:
                     for k in range(3):

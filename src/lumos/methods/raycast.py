@@ -51,7 +51,7 @@ def shade_hit(surf, lit, tex, geo, sky, o, d, cone, hit, seed, pixel, sample, sh
     n_g = n_geo if dot(n_geo, V) >= 0.0 else mul(n_geo, -1.0)
     a, dif, spec, rays = illuminate_terms(lit, geo, surf, p, n_sh, n_g, V, ka, kd, ks, shininess, seed,
                                           pixel, sample, shadows, stack, stack_t, 0.0, per_light,
-                                          log_base)
+                                          log_base, geo)
     e = (emit * ke[0], emit * ke[1], emit * ke[2])
     m = mirrored_environment(lit.ambient, sky[0], sky[1], n_sh, V, kr)
     rgb = (a[0] + dif[0] + spec[0] + e[0] + m[0], a[1] + dif[1] + spec[1] + e[1] + m[1],

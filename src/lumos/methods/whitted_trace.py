@@ -223,7 +223,8 @@ def _shade(geo, surf, lit, tex, ro, rd, hit, width, time, seed, pixel, sample, s
         e = ke
     kt = (mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2])
     la, ld, ls, extra = illuminate_terms(lit, geo, surf, p, n_s, n_g, V, ka, kd, ks, shininess,
-                                         seed, pixel, sample, True, stack, stack_t, time, light_log, light_at)
+                                         seed, pixel, sample, True, stack, stack_t, time, light_log, light_at,
+                                         geo)
     sent = (e[0] + la[0] + ld[0] + ls[0], e[1] + la[1] + ld[1] + ls[1], e[2] + la[2] + ld[2] + ls[2])
     if row >= 0:
         _log_hit(log, row, t, obj, mat_id, p, n_s, n_g, la, ld, ls, e, ka, kd, ks, u, v, entering, kr, kt)
