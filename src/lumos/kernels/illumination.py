@@ -284,7 +284,8 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
 
     `lit`, `geo` and `surf` are the `layout.Lighting`, `Geometry` and `Surfaces` views; n is the shading normal
     and n_geo the geometric one, both on the viewer's side. With `shadows`, each light sample is tested by a
-    shadow ray that transparent objects attenuate (`shadow_transmittance`); raycast passes False. Random
+    shadow ray that transparent objects attenuate (`shadow_transmittance`); raycast passes None, for which Numba
+    prunes the shadow rays' code before typing it (a literal False it would type and compile all the same). Random
     numbers for area-light samples come from (seed, pixel, sample, DIM_LIGHTS + ...), so the result depends on
     nothing else. With `log_base` >= 0, rows log_base + j of `per_light` (float64 (m, PER_LIGHT_SIZE)) receive
     light j's share (`lumos.explain`; with −1, any float64 2-D array, never touched): PL_DIFFUSE, PL_SPECULAR (rgb, shadowed), PL_SHADOW (the mean transmittance of its
@@ -321,7 +322,7 @@ def illuminate_terms(lit, geo, surf, p, n, n_geo, V, ka, kd, ks, shininess, seed
             if w == 0.0 or dot(n, L) <= 0.0:
                 continue
             tr, tg, tb = 1.0, 1.0, 1.0
-            if shadows:
+            if shadows is not None and shadows:  # (None, raycast's: the shadow rays' code is not compiled)
                 origin = offset_origin(p, n_geo, L, config.RAY_EPSILON)
                 (tr, tg, tb), extra = shadow_transmittance(geo, surf, lit, origin, L,
                                                            dist * (1.0 - config.RAY_EPSILON), stack, stack_t, time,

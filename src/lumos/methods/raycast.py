@@ -103,7 +103,7 @@ def _raycast_band(sa, cam_vecs, cam_params, width, height, y0, y1, spp, seed, mi
                     continue
                 logged = x == explain[0] and y == explain[1] and s == 0
                 rgb, n_sh, kd, obj, extra, parts = shade_hit(surf, lit, tex, geo, sky_of(sa), o, d, cone, hit, seed,
-                                                             pixel, s, False, stack, stack_t, light_log,
+                                                             pixel, s, None, stack, stack_t, light_log,
                                                              0 if logged else -1)
                 rays += extra
                 if want_terms:
