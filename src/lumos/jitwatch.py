@@ -25,7 +25,7 @@ from numba.core import event
 #: cache, its `jit_s`: BENCHMARKS.md, 2026-12-05, seventh session), when no warm-up has measured it on this
 #: machine; raycast, whitted, path and raster with shadows compile the BVH build's kernels on the other core
 #: meanwhile (`api.compile_beside_bvh`), radiosity in its own process.
-ESTIMATE_S = {"raycast": 12, "raster": 13, "whitted": 19, "path": 19, "radiosity": 11}
+ESTIMATE_S = {"raycast": 11, "raster": 13, "whitted": 19, "path": 19, "radiosity": 11}
 
 
 #: the file beside the kernels where `lumos warmup` keeps what each kernel family took to compile
