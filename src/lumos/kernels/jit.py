@@ -129,9 +129,11 @@ class DeviceDispatcher(CPUDispatcher):
         one per log column; a loop counter that starts at 0 twice) and once more for an int32 (an index read
         from an int32 array: `sample_light`, `intersect_triangle`, `clip_polygon` and eight more compiled twice).
         Unsigned integers keep their type (the random numbers' hashes wrap on purpose). Boolean constants stay
-        literal: they are the flags that decide the code on purpose (raycast's `shadows=False`). A body that
-        needs the constant itself (a static index into a heterogeneous tuple) still gets it: its plain compile
-        fails to type, and the literal one is made."""
+        literal (LLVM folds them), but Numba still types and compiles both sides of a branch on one: code to be
+        left out is selected by a None argument and an `is None` test, which Numba prunes before typing
+        (raycast's `shadows`, `traverse._pass_through`'s `shaped`). A body that needs the constant itself (a
+        static index into a heterogeneous tuple) still gets it: its plain compile fails to type, and the literal
+        one is made."""
         pysig, args = self._compiler.fold_argument_types(args, kws)
         if self._can_compile:
             plain = tuple(_plain(a) for a in args)
