@@ -409,16 +409,12 @@ def walk_transmittance_of(geo, shaped, surf, lit, origin, L, dist, stack, stack_
         t = hit[0]
         if t < 0.0:
             return (tr, tg, tb), rays
-        if shaped is None:
-            p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at_of(surf, None, o, L, t, hit[1], hit[2], hit[3],
-                                                                     hit[4], time)
-        else:
-            p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at_of(surf, surf, o, L, t, hit[1], hit[2], hit[3],
-                                                                     hit[4], time)
+        p, n_geo, n_sh, u, v, mat_id, obj, light = surface_at_of(surf, shaped, o, L, t, hit[1], hit[2], hit[3],
+                                                                 hit[4], time)
         mat = lit.materials[mat_id]
         if light >= 0:  # the emitting surface of an area light is not an occluder
             pass
-        elif mat[MAT_CUTOUT] != 0.0 and is_hole(lighting_textures(lit), mat, u, v, p):  # a cut-out's hole: light passes
+        elif mat[MAT_CUTOUT] != 0.0 and is_hole(lighting_textures(lit), mat, u, v, p):  # a cut-out's hole: passes
             pass
         else:
             kt0, kt1, kt2 = mat[MAT_KT], mat[MAT_KT + 1], mat[MAT_KT + 2]

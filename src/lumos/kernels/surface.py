@@ -83,8 +83,9 @@ def surface_at(surf, o, d, t, ref, b1, b2, part, time):
 
 @njit_inline
 def surface_at_of(surf, shaped, o, d, t, ref, b1, b2, part, time):
-    """`surface_at`, with `shaped` `surf` where the hit may be an analytic shape's and None where the scene is
-    triangles only (raster's polygons): Numba then prunes the shapes' branch before typing it."""
+    """`surface_at`, with `shaped` None where the scene is triangles only (raster's polygons): Numba then prunes
+    the shapes' branch before typing it. Anything else where the hit may be an analytic shape's (`surface_at`
+    passes `surf`, the shadow walk its geometry): only `shaped is None` is read."""
     p = madd(o, d, t)
     if ref >= 0 or shaped is None:
         v = surf.tri_verts

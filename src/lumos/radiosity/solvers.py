@@ -65,7 +65,7 @@ class Result:
     # mean radiance (gauss_seidel, jacobi)
     rays: int
     form_factor_s: float
-    columns: object = None  # progressive ray-cast shots: their `Columns`, for the next level to inherit
+    columns: object = None  # progressive ray-cast shots: their `Kept` columns, for the next level to inherit
 
 
 @dataclass
@@ -82,20 +82,21 @@ class Level:
     occluders: object = None  # CompiledScene of the surfaces that may block visibility (`solve.occluder_bvh`)
     inherited: np.ndarray | None = None  # int64 (n_elements,): an element's index at the previous level where it
     # is the same element (its polygon was not cut), else -1
-    columns: object = None  # the previous level's `Result.columns`
+    columns: object = None  # the previous level's `Result.columns` (`Kept`)
 
     def visibility_arrays(self):
         """The scene arrays the form factors' visibility rays traverse: the occluders where they are known."""
         return (self.bvh if self.occluders is None else self.occluders).arrays
 
+    def patch_sums(self, values: np.ndarray) -> np.ndarray:
+        """Σ A_i·values_i over each patch's elements i, for `values` (n_elements, 3): (n_patches, 3)."""
+        n = len(self.src.area)
+        return np.stack([np.bincount(self.recv_patch, self.recv.area * values[:, c], minlength=n)
+                         for c in range(3)], axis=1)
+
     def patch_means(self, values: np.ndarray) -> np.ndarray:
         """The area-weighted mean of `values` (n_elements, 3) over each patch's elements: (n_patches, 3)."""
-        n = len(self.src.area)
-        a = self.recv.area
-        out = np.zeros((n, 3))
-        for c in range(3):
-            out[:, c] = np.bincount(self.recv_patch, a * values[:, c], minlength=n)
-        return out / self.src.area[:, None]
+        return self.patch_sums(values) / self.src.area[:, None]
 
 
 def _lum(x: np.ndarray) -> np.ndarray:
@@ -230,7 +231,7 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
     ff_s = 0.0
     gain = Gain()
     columns = Columns(rs, level, seed, threshold) if hemi is None else None
-    patch_unshot = _patch_sums(level, unshot_e)  # (n_patches, 3): Σ A_i·ΔL_i over each patch's elements
+    patch_unshot = level.patch_sums(unshot_e)  # (n_patches, 3): Σ A_i·ΔL_i over each patch's elements
     order = np.argsort(level.recv_patch, kind="stable")  # the elements of patch j: order[starts[j]:starts[j + 1]]
     starts = np.searchsorted(level.recv_patch[order], np.arange(len(area) + 1))
     shots = 0
@@ -257,7 +258,7 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
             after = patch_unshot.sum(axis=0)
             for q, j in enumerate(top):
                 hemi.shoot(int(j), d[q], shots + q, radiance, unshot_e)
-            patch_unshot = _patch_sums(level, unshot_e)
+            patch_unshot = level.patch_sums(unshot_e)
             returned = patch_unshot.sum(axis=0) - after
         else:
             returned = columns.shoot(top, d, shots, radiance, unshot_e, patch_unshot)
@@ -273,14 +274,16 @@ def progressive(rs, level: Level, sent, seed, progress, say) -> Result:
     radiance = radiance + ambient_term(recv, unshot_e, gain.value())
     if columns is None:
         return Result(radiance, shots, residual, 0, ff_s)
-    return Result(radiance, shots, residual, columns.rays, ff_s, columns)
+    return Result(radiance, shots, residual, columns.rays, ff_s, Kept(columns.kept, columns.slot))
 
 
-def _patch_sums(level: Level, values: np.ndarray) -> np.ndarray:
-    """Σ A_i·values_i over each patch's elements: (n_patches, 3)."""
-    n = len(level.src.area)
-    return np.stack([np.bincount(level.recv_patch, level.recv.area * values[:, c], minlength=n) for c in range(3)],
-                    axis=1)
+@dataclass
+class Kept:
+    """A level's kept form factors, what the next level inherits (`Columns`): the float32 (n_elements, k) columns
+    and the column of each shooter (-1: none). Only these arrays: a level's solver state goes with it."""
+
+    kept: np.ndarray
+    slot: np.ndarray
 
 
 class Columns:
@@ -335,7 +338,7 @@ class Columns:
             got = recv.rho * ((ff * _conserving(ff, recv.area, area[top[left]])) @ d[left])
             radiance += got
             unshot += got
-            patch_unshot += _patch_sums(self.level, got)
+            patch_unshot += self.level.patch_sums(got)
             received += recv.area @ got
         kept = top[self.slot[top] >= 0]
         w = np.ascontiguousarray(d[self.slot[top] >= 0] * self.scale[kept, None])
