@@ -104,25 +104,32 @@ BESIDE_BVH = ("raycast", "raster", "whitted", "path")
 
 
 def compile_beside_bvh(scene, cfg) -> None:
-    """On a first run with nothing compiled (the BVH build's kernels not in the cache), compile the method's
-    kernels while a `lumos warmup --methods bvh` process compiles the BVH build's on another core. The kernels
+    """On a first run with something to compile, compile the method's kernels while a second process
+    (`lumos warmup --methods bvh [--plan METHOD]`) compiles, on another core, the BVH build's kernels where they
+    are not cached, and first, where the method has a compile plan and its kernel is not cached, the device
+    functions the plan gives it (`kernels.plan`), which this compile then loads as it reaches them. The kernels
     need the scene's array types, not its tree, so they compile against the scene compiled with an empty one
     (`compile_for(..., tree=False)`), rendered at 2×2 and thrown away; the compile that follows loads the BVH
-    build's kernels, and the render finds its own compiled (BENCHMARKS.md, 2026-12-05, seventh session)."""
+    build's kernels, and the render finds its own compiled (BENCHMARKS.md, 2026-12-05, seventh and eighth
+    sessions). `LUMOS_COMPILE_HELPER=0` compiles everything in this process."""
     import os
     import subprocess
 
+    from .kernels import plan
     from .kernels.bvh_build import build_nodes
     from .kernels.cache import has_entries
     from .methods import compile_for
 
-    if (os.cpu_count() or 1) < 2 or has_entries(build_nodes):
+    if (os.cpu_count() or 1) < 2 or os.environ.get("LUMOS_COMPILE_HELPER") == "0":
         return
+    share = bool(plan.load(cfg.method)["roots"]) and not plan.top_cached(cfg.method)
+    if not share and has_entries(build_nodes):
+        return
+    command = [sys.executable, "-m", "lumos", "warmup", "--methods", "bvh", "--jobs", "1", "--quiet"]
     try:
-        helper = subprocess.Popen([sys.executable, "-m", "lumos", "warmup", "--methods", "bvh", "--jobs", "1",
-                                   "--quiet"], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                  stderr=subprocess.DEVNULL)
-    except OSError:  # no process to be had here: the BVH build compiles in this one, as it would have
+        helper = subprocess.Popen(command + (["--plan", cfg.method] if share else []), stdin=subprocess.DEVNULL,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:  # no process to be had here: everything compiles in this one, as it would have
         return
     try:
         small = cfg.model_copy(update={"width": 2, "height": 2})

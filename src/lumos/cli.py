@@ -226,6 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
                       "bvh, raycast, raster, whitted, path, radiosity, queries")
     warm.add_argument("--jobs", type=int, metavar="N", help="processes at once (default: one per core)")
     warm.add_argument("--quiet", action="store_true", help="print nothing")
+    warm.add_argument("--plan", metavar="METHOD", help="first compile the device functions METHOD's compile plan "
+                      "gives a helper (what a cold first render runs beside its own compile: lumos.kernels.plan)")
     warm.set_defaults(run=run_warmup)
 
     info = commands.add_parser("info", help="print what a scene holds")
@@ -654,6 +656,13 @@ def run_warmup(args: argparse.Namespace, started: float) -> int:
         raise LumosError(f"--methods: {exc}") from None
     if args.jobs is not None and args.jobs < 1:
         raise LumosError("--jobs: give at least 1")
+    if args.plan is not None:
+        from .api import METHODS
+        from .kernels import plan
+
+        if args.plan not in METHODS:
+            raise LumosError(f"--plan: unknown method {args.plan!r} (choose from {', '.join(METHODS)})")
+        plan.compile_share(args.plan)
     return warmup.main(families, jobs=args.jobs, quiet=args.quiet)
 
 

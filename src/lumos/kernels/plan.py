@@ -1,0 +1,85 @@
+"""A cold first render's compile, shared with a second process: compile plans.
+
+A method's first render on a cold cache compiles one top-level kernel and the device functions under it, one after
+the other, in the order Numba types them (whitted's and the path tracer's: about 190 and 225 functions, 20 s on
+one core). Device functions are cached on their own (`jit.DeviceLibrary`), so another process can compile some of
+them meanwhile: the render, when its compile reaches one that process has finished, loads it instead.
+
+That process needs to know what to compile before the render's own compile has typed anything: which device
+functions, for which argument types. A *plan* (`plans/<method>.json`) says so. It is recorded from a cold render
+(`python -m lumos.tools.plans`), which also chooses, by simulating both processes on the recorded compile
+times and call graph, the subtrees (*roots*) the helper takes: those the render reaches last, so that it finds
+them done (the render compiles in call order; the helper starts from the other end). Each root holds its
+function's module and name, its argument types (pickled Numba types) and the stamp of its source closure when it
+was recorded (`cache.closure_stamp`): a root whose sources have changed since is skipped, so a stale plan costs
+nothing but the help it no longer gives, and the kernels compiled are always those of the sources as they are.
+
+    compile_share("whitted")     # in the helper process (`lumos warmup --plan whitted`)
+"""
+
+from __future__ import annotations
+
+import base64
+import importlib
+import json
+import pickle
+from functools import lru_cache
+from pathlib import Path
+
+PLAN_DIR = Path(__file__).resolve().parent / "plans"
+
+
+@lru_cache(maxsize=None)
+def load(method: str) -> dict:
+    """The plan of `method` (its JSON object: `top` the top-level kernel as [module, name], `roots` in the order
+    the helper compiles them), or an empty one where there is none."""
+    path = PLAN_DIR / f"{method}.json"
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {"top": None, "roots": []}
+
+
+def resolve(module: str, name: str):
+    """The dispatcher `module.name`, or None where it is gone."""
+    try:
+        obj = importlib.import_module(module)
+        for part in name.split("."):
+            obj = getattr(obj, part)
+    except (ImportError, AttributeError):
+        return None
+    return obj if hasattr(obj, "py_func") else None
+
+
+def top_cached(method: str) -> bool:
+    """Whether `method`'s top-level kernel has cache entries for its sources as they are (then there is nothing
+    to share: its render loads it). True where the method has no plan."""
+    from .cache import has_entries
+
+    top = load(method).get("top")
+    kernel = resolve(*top) if top else None
+    return kernel is None or has_entries(kernel)
+
+
+def compile_share(method: str) -> int:
+    """Compile (or load) the roots of `method`'s plan whose sources are as recorded, in the plan's order, into the
+    kernel cache; returns how many were compiled or loaded. A root that fails (a type that no longer unpickles, a
+    signature the function no longer takes) is skipped: the render compiles whatever it needs itself."""
+    from .cache import closure_stamp
+
+    done = 0
+    for root in load(method)["roots"]:
+        dispatcher = resolve(root["module"], root["name"])
+        if dispatcher is None or closure_stamp(dispatcher.py_func) != root["stamp"]:
+            continue
+        try:
+            dispatcher.compile(pickle.loads(base64.b64decode(root["args"])))
+        except Exception:  # (best effort: see the docstring)
+            continue
+        done += 1
+    return done
+
+
+def encode_args(args: tuple) -> str:
+    """A root's argument types as the plan stores them."""
+    return base64.b64encode(pickle.dumps(tuple(args), protocol=4)).decode("ascii")

@@ -1,0 +1,215 @@
+"""Record the compile plans a cold first render shares with a helper process (`kernels.plan`).
+
+    python -m lumos.tools.plans                     # whitted and path, from a checkout (it renders its examples)
+    python -m lumos.tools.plans --methods path
+
+For each method, a child process renders the method's example at 160×120, 1 spp, on an empty kernel cache, with
+no helper, and listens to Numba's compile events: every function compiled under the method's top-level kernel,
+in order, with its own (exclusive) compile time, and which device function calls which. `choose` then picks the
+subtrees a helper process compiles meanwhile (simulating both processes on those times), and the plan is written
+to `src/lumos/kernels/plans/<method>.json`. Run it again after changing kernels: roots whose sources changed are
+skipped by the helper until then (the renders stay right, only slower to compile).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from ..kernels.plan import PLAN_DIR, encode_args, resolve
+
+#: what each planned method's first render is recorded on (bench_first_image's scenes)
+SCENES = {"whitted": "showcase.yaml", "path": "path/cornell.yaml"}
+#: the top-level kernel of each planned method's first render
+TOPS = {"whitted": ("lumos.methods.whitted_pixels", "pixel_rows"), "path": ("lumos.methods.path_trace", "pass_rows")}
+#: the helper starts this much later than the render's compile (its own imports, against the render's imports,
+#: scene and empty-tree compile), and loading an entry another process compiled costs about this (seconds)
+HELPER_START_S = 0.3
+LOAD_S = 0.01
+
+
+def record(method: str, examples: Path) -> dict:
+    """What a cold first render of `method` compiles, in this process: {order: [[module, name], ...] in the order
+    their compiles finished, excl: seconds each, calls: [[caller, callee], ...] (indices into order), args:
+    {index: encoded argument types} for the device functions, bvh_s: the compile time outside the method's
+    top-level kernel (the BVH build's, which the helper compiles after its share)}."""
+    import time as _time
+
+    from numba.core import event
+
+    import lumos
+    from lumos.kernels.jit import DeviceDispatcher
+
+    top = TOPS[method]
+    stack: list[list] = []  # [key, start, nested]
+    order: list[tuple] = []
+    excl: dict[tuple, float] = {}
+    args: dict[tuple, str] = {}
+    calls: set[tuple] = set()
+    outside = [0.0]
+    inside = [False]
+
+    def key_of(dispatcher) -> tuple:
+        return dispatcher.py_func.__module__, dispatcher.py_func.__qualname__
+
+    class Compiles(event.Listener):
+        def on_start(self, ev):
+            key = key_of(ev.data["dispatcher"])
+            if not stack and key == top:
+                inside[0] = True
+            stack.append([key, _time.perf_counter(), 0.0])
+
+        def on_end(self, ev):
+            key, start, nested = stack.pop()
+            took = _time.perf_counter() - start
+            if stack:
+                stack[-1][2] += took
+            if not inside[0]:
+                if not stack:
+                    outside[0] += took
+                return
+            if key not in excl:
+                order.append(key)
+                excl[key] = 0.0
+                dispatcher = ev.data["dispatcher"]
+                if isinstance(dispatcher, DeviceDispatcher):
+                    try:
+                        args[key] = encode_args(ev.data["args"])
+                    except Exception:  # (a type that does not pickle: never a root)
+                        pass
+            excl[key] += took - nested
+            if not stack:
+                inside[0] = False
+
+    plain_template = DeviceDispatcher.get_call_template
+
+    def get_call_template(self, call_args, kws):
+        if inside[0] and stack:
+            calls.add((stack[-1][0], key_of(self)))
+        return plain_template(self, call_args, kws)
+
+    DeviceDispatcher.get_call_template = get_call_template
+    event.register("numba:compile", Compiles())
+    scene = lumos.load_scene(examples / SCENES[method])
+    lumos.render(scene, method=method, width=160, height=120, spp=1)
+    index = {key: i for i, key in enumerate(order)}
+    return {"order": [list(k) for k in order], "excl": [excl[k] for k in order],
+            "calls": sorted([index[a], index[b]] for a, b in calls if a in index and b in index),
+            "args": {str(index[k]): v for k, v in args.items()}, "bvh_s": outside[0]}
+
+
+def _closures(n: int, calls: list) -> list[list[int]]:
+    """Each function's callees, transitively, itself included, in compile order (a function's callees finish
+    before it does, so the recorded order is the order a compile of any one of them takes them in)."""
+    kids: dict[int, list[int]] = {}
+    for a, b in calls:
+        kids.setdefault(a, []).append(b)
+    out = []
+    for i in range(n):
+        seen, todo = {i}, [i]
+        while todo:
+            for c in kids.get(todo.pop(), ()):
+                if c not in seen:
+                    seen.add(c)
+                    todo.append(c)
+        out.append(sorted(seen))
+    return out
+
+
+def simulate(roots: list[int], excl: list[float], closures: list[list[int]], start: float = HELPER_START_S,
+             load: float = LOAD_S) -> tuple[float, float]:
+    """When the render's compile and the helper's share end (seconds) if the helper compiles the closures of
+    `roots` in that order while the render compiles everything in order: each loads what the other finished
+    before it got there, and compiles the rest (a function both reach at once is compiled twice)."""
+    inf = float("inf")
+    main_done: dict[int, float] = {}
+    helper_done: dict[int, float] = {}
+    t_main = t_helper = 0.0
+    for _ in range(3):  # each side's timeline depends on the other's: a few rounds settle it
+        t_helper, helper_done = start, {}
+        for r in roots:
+            for k in closures[r]:
+                if k not in helper_done:
+                    t_helper += load if main_done.get(k, inf) <= t_helper else excl[k]
+                    helper_done[k] = t_helper
+        t_main, main_done = 0.0, {}
+        for k in range(len(excl)):
+            t_main += load if helper_done.get(k, inf) <= t_main else excl[k]
+            main_done[k] = t_main
+    return t_main, t_helper
+
+
+def choose(excl: list[float], calls: list, candidates: set[int], bvh_s: float) -> tuple[list[int], float, float]:
+    """The roots for the helper, the latest in compile order first: greedily, the function whose subtree, added,
+    most shortens max(the render's compile, the helper's share + the BVH build's compile). Returns (roots, that
+    time, the render's compile alone)."""
+    closures = _closures(len(excl), calls)
+    alone = sum(excl)
+    best, roots = max(alone, HELPER_START_S + bvh_s), []
+    while True:
+        pick = None
+        for c in sorted(candidates - set(roots)):
+            if any(c in closures[r] for r in roots):
+                continue
+            trial = sorted(roots + [c], reverse=True)
+            t_main, t_helper = simulate(trial, excl, closures)
+            finish = max(t_main, t_helper + bvh_s)
+            if finish < best - 1e-3:
+                best, pick = finish, trial
+        if pick is None:
+            return roots, best, alone
+        roots = [r for r in pick if not any(r != o and r in closures[o] for o in pick)]
+
+
+def plan_of(method: str, rec: dict) -> dict:
+    """The plan JSON object for `method` from a `record`ing."""
+    from lumos.kernels.cache import closure_stamp
+
+    candidates = {int(i) for i in rec["args"]}
+    roots, finish, alone = choose(rec["excl"], rec["calls"], candidates, rec["bvh_s"])
+    entries = []
+    for r in roots:
+        module, name = rec["order"][r]
+        entries.append({"module": module, "name": name, "stamp": closure_stamp(resolve(module, name).py_func),
+                        "args": rec["args"][str(r)]})
+    return {"method": method, "top": list(TOPS[method]),
+            "recorded": {"date": time.strftime("%Y-%m-%d"), "machine": platform.processor() or platform.machine(),
+                         "compile_alone_s": round(alone, 2), "bvh_s": round(rec["bvh_s"], 2),
+                         "predicted_s": round(finish, 2), "functions": len(rec["order"])},
+            "roots": entries}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--methods", default=",".join(TOPS), help="methods to record (default: %(default)s)")
+    ap.add_argument("--examples", type=Path, default=Path(__file__).resolve().parents[3] / "examples",
+                    help="the checkout's examples folder (default: %(default)s)")
+    ap.add_argument("--child", metavar="METHOD", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.child:
+        print(json.dumps(record(args.child, args.examples)))
+        return 0
+    for method in args.methods.split(","):
+        with tempfile.TemporaryDirectory(prefix="lumos-plan-") as cache:
+            env = {**os.environ, "LUMOS_CACHE_DIR": cache, "NUMBA_CACHE_DIR": cache,
+                   "LUMOS_COMPILE_HELPER": "0"}
+            out = subprocess.run([sys.executable, "-m", "lumos.tools.plans", "--child", method, "--examples",
+                                  str(args.examples)], env=env, capture_output=True, text=True, check=True)
+        plan = plan_of(method, json.loads(out.stdout.strip().splitlines()[-1]))
+        PLAN_DIR.mkdir(exist_ok=True)
+        (PLAN_DIR / f"{method}.json").write_text(json.dumps(plan, indent=1) + "\n")
+        rec = plan["recorded"]
+        print(f"{method}: {rec['functions']} functions, {rec['compile_alone_s']} s alone; with the helper's "
+              f"{len(plan['roots'])} roots (then the BVH build's {rec['bvh_s']} s) about {rec['predicted_s']} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

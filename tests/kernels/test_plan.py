@@ -1,0 +1,152 @@
+"""Compile plans (`lumos.kernels.plan`, recorded by `lumos.tools.plans`): what a helper process compiles beside a
+cold first render, and how the roots are chosen."""
+
+import base64
+import json
+import os
+import pickle
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from lumos.kernels import plan
+from lumos.kernels.cache import closure_stamp
+from lumos.kernels.jit import DeviceDispatcher
+from lumos.tools.plans import choose, simulate
+
+CHILD = textwrap.dedent("""
+    import json, sys
+    from pathlib import Path
+    from numba.core import event
+    sys.path.insert(0, sys.argv[1])
+    compiled = []
+    class Count(event.Listener):
+        def on_start(self, ev):
+            compiled.append(ev.data["dispatcher"].py_func.__name__)
+        def on_end(self, ev):
+            pass
+    event.register("numba:compile", Count())
+    import numpy as np
+    from numba import types
+    from lumos.kernels import plan
+    from lumos.kernels.cache import closure_stamp
+    import ctplan.device as device
+    plan.PLAN_DIR = Path(sys.argv[1]) / "plans"
+    result = {}
+    if sys.argv[2] == "record":  # the plan: the helper takes g (and h under it), called with a float64
+        plan.PLAN_DIR.mkdir(exist_ok=True)
+        (plan.PLAN_DIR / "m.json").write_text(json.dumps({"top": ["ctplan.kernels", "first"], "roots": [
+            {"module": "ctplan.device", "name": "g", "stamp": closure_stamp(device.g.py_func),
+             "args": plan.encode_args((types.float64,))}]}))
+    elif sys.argv[2] == "share":
+        result["shared"] = plan.compile_share("m")
+    else:
+        import ctplan.kernels as k
+        out = np.zeros(4)
+        k.first(np.arange(4.0), out)
+        result["out"] = out.tolist()
+        result["top_cached"] = plan.top_cached("m")
+    result["compiled"] = sorted(compiled)
+    print(json.dumps(result))
+""")
+
+
+def _write_package(root: Path, g_body: str = "x * 2.0") -> None:
+    pkg = root / "ctplan"
+    pkg.mkdir(exist_ok=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "device.py").write_text(textwrap.dedent(f"""
+        from lumos.kernels.jit import njit
+
+        @njit
+        def h(x):
+            return x + 1.0
+
+        @njit
+        def g(x):
+            return h({g_body})
+    """))
+    (pkg / "kernels.py").write_text(textwrap.dedent("""
+        from lumos.kernels.jit import njit_serial
+        from .device import g
+
+        @njit_serial
+        def first(x, out):
+            for i in range(x.size):
+                out[i] = g(x[i])
+    """))
+
+
+def _child(root: Path, cache: Path, mode: str) -> dict:
+    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache))
+    env.pop("NUMBA_CACHE_DIR", None)
+    proc = subprocess.run([sys.executable, "-c", CHILD, str(root), mode], env=env, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_a_helper_compiles_the_plans_roots_and_the_render_loads_them(tmp_path):
+    """The helper process compiles a root (and its callees) into the cache; the kernel compiled after it in
+    another process compiles only itself. A root whose sources changed since the plan was recorded is skipped,
+    never compiled for the recorded stamp, and the kernel then compiles what it needs."""
+    _write_package(tmp_path)
+    _child(tmp_path, tmp_path / "unused", "record")
+    cache = tmp_path / "cache"
+    assert _child(tmp_path, cache, "share") == {"shared": 1, "compiled": ["g", "h"]}
+    render = _child(tmp_path, cache, "render")
+    assert render["compiled"] == ["first"] and render["out"] == [1.0, 3.0, 5.0, 7.0] and render["top_cached"]
+
+    _write_package(tmp_path, g_body="x * 3.0")  # edited after the plan was recorded
+    cache = tmp_path / "cache2"
+    assert _child(tmp_path, cache, "share") == {"shared": 0, "compiled": []}
+    render = _child(tmp_path, cache, "render")
+    assert render["compiled"] == ["first", "g", "h"] and render["out"] == [1.0, 4.0, 7.0, 10.0]
+
+
+# a call graph: top (4) calls B (1) and C (3); B calls leaf 0, C calls leaf 2; compiled in index order
+EXCL = [2.0, 1.0, 2.0, 1.0, 1.0]
+CALLS = [[1, 0], [3, 2], [4, 1], [4, 3]]
+
+
+def test_the_simulation_of_both_processes():
+    assert simulate([], EXCL, [[0], [0, 1], [2], [2, 3], [0, 1, 2, 3, 4]], start=0.3) == (7.0, 0.3)
+    # the helper takes C's subtree from t = 0.3: leaf 2 done at 2.3, C at 3.3. The render compiles leaf 0 and B
+    # (3.0), loads leaf 2 (done before it got there), compiles C (not done yet when it gets there), then top.
+    t_main, t_helper = simulate([3], EXCL, [[0], [0, 1], [2], [2, 3], [0, 1, 2, 3, 4]], start=0.3, load=0.01)
+    assert t_main == pytest.approx(3.0 + 0.01 + 1.0 + 1.0) and t_helper == pytest.approx(3.3)
+
+
+def test_the_helper_takes_the_subtree_the_render_reaches_last():
+    roots, finish, alone = choose(EXCL, CALLS, {0, 1, 2, 3}, bvh_s=0.0)
+    assert alone == 7.0 and finish < alone
+    assert 3 in roots or 2 in roots  # C's side: the render reaches it last
+    assert 1 not in roots and 0 not in roots
+    # a helper that must compile the BVH build's kernels for longer than the whole render takes no share
+    assert choose(EXCL, CALLS, {0, 1, 2, 3}, bvh_s=10.0)[0] == []
+
+
+@pytest.mark.parametrize("path", sorted(plan.PLAN_DIR.glob("*.json")), ids=lambda p: p.stem)
+def test_the_shipped_plans_are_current(path):
+    """Every root of a shipped plan is a device function with argument types that load, recorded from the
+    sources as they are: a kernel change since leaves the helper nothing to do for the roots it touches (cold
+    first renders slower again), until the plans are recorded again with `python -m lumos.tools.plans`."""
+    recorded = json.loads(path.read_text())
+    assert plan.resolve(*recorded["top"]) is not None
+    assert recorded["roots"]
+    for root in recorded["roots"]:
+        dispatcher = plan.resolve(root["module"], root["name"])
+        assert isinstance(dispatcher, DeviceDispatcher), root["name"]
+        assert closure_stamp(dispatcher.py_func) == root["stamp"], (
+            f"{path.name}: {root['module']}.{root['name']} changed since its plan was recorded; run "
+            "`python -m lumos.tools.plans` (from a checkout) to record the plans again")
+        assert isinstance(pickle.loads(base64.b64decode(root["args"])), tuple)
+
+
+def test_warmup_refuses_a_plan_for_an_unknown_method():
+    proc = subprocess.run([sys.executable, "-m", "lumos", "warmup", "--methods", "bvh", "--plan", "nosuch"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "--plan: unknown method 'nosuch'" in proc.stderr
