@@ -107,7 +107,8 @@ def compile_beside_bvh(scene, cfg) -> None:
     """On a first run with something to compile, compile the method's kernels while a second process
     (`lumos warmup --methods bvh [--plan METHOD]`) compiles, on another core, the BVH build's kernels where they
     are not cached, and first, where the method has a compile plan and its kernel is not cached, the device
-    functions the plan gives it (`kernels.plan`), which this compile then loads as it reaches them. The kernels
+    functions the plan gives it (`kernels.plan`), which this compile then loads as it reaches them (this process
+    compiles the plan's `first` subtrees before its kernel, so that the two start apart). The kernels
     need the scene's array types, not its tree, so they compile against the scene compiled with an empty one
     (`compile_for(..., tree=False)`), rendered at 2×2 and thrown away; the compile that follows loads the BVH
     build's kernels, and the render finds its own compiled (BENCHMARKS.md, 2026-12-05, seventh and eighth
@@ -132,6 +133,8 @@ def compile_beside_bvh(scene, cfg) -> None:
     except OSError:  # no process to be had here: everything compiles in this one, as it would have
         return
     try:
+        if share:
+            plan.compile_share(cfg.method, "first")
         small = cfg.model_copy(update={"width": 2, "height": 2})
         entry_point(cfg.method)(compile_for(scene, small, tree=False), scene.camera, small)
     except Exception:  # a scene the real compile refuses says why there; a kernel not compiled here compiles there

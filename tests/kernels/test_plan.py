@@ -110,23 +110,31 @@ def test_a_helper_compiles_the_plans_roots_and_the_render_loads_them(tmp_path):
 # a call graph: top (4) calls B (1) and C (3); B calls leaf 0, C calls leaf 2; compiled in index order
 EXCL = [2.0, 1.0, 2.0, 1.0, 1.0]
 CALLS = [[1, 0], [3, 2], [4, 1], [4, 3]]
+CLOSURES = [[0], [0, 1], [2], [2, 3], [0, 1, 2, 3, 4]]
 
 
 def test_the_simulation_of_both_processes():
-    assert simulate([], EXCL, [[0], [0, 1], [2], [2, 3], [0, 1, 2, 3, 4]], start=0.3) == (7.0, 0.3)
+    assert simulate([], [], EXCL, CLOSURES, start=0.3) == (7.0, 0.3)
     # the helper takes C's subtree from t = 0.3: leaf 2 done at 2.3, C at 3.3. The render compiles leaf 0 and B
     # (3.0), loads leaf 2 (done before it got there), compiles C (not done yet when it gets there), then top.
-    t_main, t_helper = simulate([3], EXCL, [[0], [0, 1], [2], [2, 3], [0, 1, 2, 3, 4]], start=0.3, load=0.01)
+    t_main, t_helper = simulate([], [3], EXCL, CLOSURES, start=0.3, load=0.01)
+    assert t_main == pytest.approx(3.0 + 0.01 + 1.0 + 1.0) and t_helper == pytest.approx(3.3)
+    # the render compiling C's subtree first and the helper B's, from the same moment: they never meet, and the
+    # render loads B's; a helper 0.3 s late has not finished B when the render gets there, which compiles it
+    t_main, t_helper = simulate([3], [1], EXCL, CLOSURES, start=0.0, load=0.01)
+    assert t_main == pytest.approx(3.0 + 0.01 + 0.01 + 1.0) and t_helper == pytest.approx(3.0)
+    t_main, t_helper = simulate([3], [1], EXCL, CLOSURES, start=0.3, load=0.01)
     assert t_main == pytest.approx(3.0 + 0.01 + 1.0 + 1.0) and t_helper == pytest.approx(3.3)
 
 
-def test_the_helper_takes_the_subtree_the_render_reaches_last():
-    roots, finish, alone = choose(EXCL, CALLS, {0, 1, 2, 3}, bvh_s=0.0)
-    assert alone == 7.0 and finish < alone
-    assert 3 in roots or 2 in roots  # C's side: the render reaches it last
-    assert 1 not in roots and 0 not in roots
+def test_the_plan_splits_the_call_graph_between_the_two():
+    first, roots, finish, alone = choose(EXCL, CALLS, {0, 1, 2, 3}, bvh_s=0.0)
+    assert alone == 7.0 and finish == pytest.approx(5.01)  # one leaf's compile off the render's 7 s
+    t_main, t_helper = simulate(first, roots, EXCL, CLOSURES)
+    assert finish == pytest.approx(max(t_main, t_helper)) and roots and not set(first) & set(roots)
     # a helper that must compile the BVH build's kernels for longer than the whole render takes no share
-    assert choose(EXCL, CALLS, {0, 1, 2, 3}, bvh_s=10.0)[0] == []
+    first, roots, finish, alone = choose(EXCL, CALLS, {0, 1, 2, 3}, bvh_s=10.0)
+    assert roots == [] and finish == pytest.approx(10.3)
 
 
 @pytest.mark.parametrize("path", sorted(plan.PLAN_DIR.glob("*.json")), ids=lambda p: p.stem)
@@ -136,8 +144,8 @@ def test_the_shipped_plans_are_current(path):
     first renders slower again), until the plans are recorded again with `python -m lumos.tools.plans`."""
     recorded = json.loads(path.read_text())
     assert plan.resolve(*recorded["top"]) is not None
-    assert recorded["roots"]
-    for root in recorded["roots"]:
+    assert recorded["roots"] and recorded["first"]
+    for root in recorded["roots"] + recorded["first"]:
         dispatcher = plan.resolve(root["module"], root["name"])
         assert isinstance(dispatcher, DeviceDispatcher), root["name"]
         assert closure_stamp(dispatcher.py_func) == root["stamp"], (

@@ -8,13 +8,15 @@ them meanwhile: the render, when its compile reaches one that process has finish
 That process needs to know what to compile before the render's own compile has typed anything: which device
 functions, for which argument types. A *plan* (`plans/<method>.json`) says so. It is recorded from a cold render
 (`python -m lumos.tools.plans`), which also chooses, by simulating both processes on the recorded compile
-times and call graph, the subtrees (*roots*) the helper takes: those the render reaches last, so that it finds
-them done (the render compiles in call order; the helper starts from the other end). Each root holds its
+times and call graph, the subtrees (*roots*) the helper takes, and those the render compiles *first*, before
+its top-level kernel (whose compile reaches the others in call order): so the two start on different parts of
+the call graph, and the render finds the helper's done when it gets there. Each root holds its
 function's module and name, its argument types (pickled Numba types) and the stamp of its source closure when it
 was recorded (`cache.closure_stamp`): a root whose sources have changed since is skipped, so a stale plan costs
 nothing but the help it no longer gives, and the kernels compiled are always those of the sources as they are.
 
-    compile_share("whitted")     # in the helper process (`lumos warmup --plan whitted`)
+    compile_share("whitted")             # in the helper process (`lumos warmup --plan whitted`)
+    compile_share("whitted", "first")    # in the render's, before its kernel (`api.compile_beside_bvh`)
 """
 
 from __future__ import annotations
@@ -32,12 +34,12 @@ PLAN_DIR = Path(__file__).resolve().parent / "plans"
 @lru_cache(maxsize=None)
 def load(method: str) -> dict:
     """The plan of `method` (its JSON object: `top` the top-level kernel as [module, name], `roots` in the order
-    the helper compiles them), or an empty one where there is none."""
+    the helper compiles them, `first` what the render compiles first), or an empty one where there is none."""
     path = PLAN_DIR / f"{method}.json"
     try:
         return json.loads(path.read_text())
     except (OSError, ValueError):
-        return {"top": None, "roots": []}
+        return {"top": None, "roots": [], "first": []}
 
 
 def resolve(module: str, name: str):
@@ -61,14 +63,15 @@ def top_cached(method: str) -> bool:
     return kernel is None or has_entries(kernel)
 
 
-def compile_share(method: str) -> int:
-    """Compile (or load) the roots of `method`'s plan whose sources are as recorded, in the plan's order, into the
-    kernel cache; returns how many were compiled or loaded. A root that fails (a type that no longer unpickles, a
-    signature the function no longer takes) is skipped: the render compiles whatever it needs itself."""
+def compile_share(method: str, side: str = "roots") -> int:
+    """Compile (or load) the roots of `method`'s plan for `side` ("roots": the helper's; "first": the render's)
+    whose sources are as recorded, in the plan's order, into the kernel cache; returns how many were compiled or
+    loaded. A root that fails (a type that no longer unpickles, a signature the function no longer takes) is
+    skipped: the render compiles whatever it needs itself."""
     from .cache import closure_stamp
 
     done = 0
-    for root in load(method)["roots"]:
+    for root in load(method).get(side, []):
         dispatcher = resolve(root["module"], root["name"])
         if dispatcher is None or closure_stamp(dispatcher.py_func) != root["stamp"]:
             continue

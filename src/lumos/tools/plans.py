@@ -6,8 +6,8 @@
 For each method, a child process renders the method's example at 160×120, 1 spp, on an empty kernel cache, with
 no helper, and listens to Numba's compile events: every function compiled under the method's top-level kernel,
 in order, with its own (exclusive) compile time, and which device function calls which. `choose` then picks the
-subtrees a helper process compiles meanwhile (simulating both processes on those times), and the plan is written
-to `src/lumos/kernels/plans/<method>.json`. Run it again after changing kernels: roots whose sources changed are
+subtrees a helper process compiles meanwhile and those the render compiles first (simulating both processes on
+those times), and the plan is written to `src/lumos/kernels/plans/<method>.json`. Run it again after changing kernels: roots whose sources changed are
 skipped by the helper until then (the renders stay right, only slower to compile).
 """
 
@@ -123,12 +123,18 @@ def _closures(n: int, calls: list) -> list[list[int]]:
     return out
 
 
-def simulate(roots: list[int], excl: list[float], closures: list[list[int]], start: float = HELPER_START_S,
-             load: float = LOAD_S) -> tuple[float, float]:
-    """When the render's compile and the helper's share end (seconds) if the helper compiles the closures of
-    `roots` in that order while the render compiles everything in order: each loads what the other finished
-    before it got there, and compiles the rest (a function both reach at once is compiled twice)."""
+def simulate(first: list[int], roots: list[int], excl: list[float], closures: list[list[int]],
+             start: float = HELPER_START_S, load: float = LOAD_S) -> tuple[float, float]:
+    """When the render's compile and the helper's share end (seconds) if the render compiles the closures of
+    `first` in that order and then everything else in the recorded order, while the helper, from `start`,
+    compiles the closures of `roots` in that order: each loads what the other finished before it got there, and
+    compiles the rest (a function both reach at once is compiled twice)."""
     inf = float("inf")
+    order, seen = [], set()
+    for k in [k for r in first for k in closures[r]] + list(range(len(excl))):
+        if k not in seen:
+            seen.add(k)
+            order.append(k)
     main_done: dict[int, float] = {}
     helper_done: dict[int, float] = {}
     t_main = t_helper = 0.0
@@ -140,32 +146,47 @@ def simulate(roots: list[int], excl: list[float], closures: list[list[int]], sta
                     t_helper += load if main_done.get(k, inf) <= t_helper else excl[k]
                     helper_done[k] = t_helper
         t_main, main_done = 0.0, {}
-        for k in range(len(excl)):
+        for k in order:
             t_main += load if helper_done.get(k, inf) <= t_main else excl[k]
             main_done[k] = t_main
     return t_main, t_helper
 
 
-def choose(excl: list[float], calls: list, candidates: set[int], bvh_s: float) -> tuple[list[int], float, float]:
-    """The roots for the helper, the latest in compile order first: greedily, the function whose subtree, added,
-    most shortens max(the render's compile, the helper's share + the BVH build's compile). Returns (roots, that
-    time, the render's compile alone)."""
+def choose(excl: list[float], calls: list, candidates: set[int], bvh_s: float):
+    """Which subtrees the render compiles first (before its top-level kernel, in compile order) and which the helper
+    compiles meanwhile (in compile order or against it, whichever is quicker; then the BVH build's kernels), to shorten
+    max(the render's compile, the helper's share + the BVH build's compile): a local search from nothing, whose
+    moves give a function's subtree to one side, take a root away, or hand it to the other side, taking the best
+    move until none helps. Returns (first, roots, that time, the render's compile alone)."""
     closures = _closures(len(excl), calls)
     alone = sum(excl)
-    best, roots = max(alone, HELPER_START_S + bvh_s), []
+
+    def tidy(picked, reverse):
+        picked = sorted(set(picked), reverse=reverse)
+        return [r for r in picked if not any(r != o and r in closures[o] for o in picked)]
+
+    def cost(first, roots):
+        t_main, t_helper = simulate(first, roots, excl, closures)
+        return max(t_main, t_helper + bvh_s)
+
+    first, roots = [], []
+    best = cost(first, roots)
     while True:
-        pick = None
-        for c in sorted(candidates - set(roots)):
-            if any(c in closures[r] for r in roots):
-                continue
-            trial = sorted(roots + [c], reverse=True)
-            t_main, t_helper = simulate(trial, excl, closures)
-            finish = max(t_main, t_helper + bvh_s)
-            if finish < best - 1e-3:
-                best, pick = finish, trial
-        if pick is None:
-            return roots, best, alone
-        roots = [r for r in pick if not any(r != o and r in closures[o] for o in pick)]
+        moves = []
+        for c in sorted(candidates):
+            moves.append((tidy(first + [c], False), roots))
+            moves += [(first, tidy(roots + [c], order)) for order in (False, True)]
+        for r in first:
+            rest = [o for o in first if o != r]
+            moves += [(rest, roots)] + [(rest, tidy(roots + [r], order)) for order in (False, True)]
+        for r in roots:
+            rest = [o for o in roots if o != r]
+            moves += [(first, rest), (tidy(first + [r], False), rest)]
+        pick = min(moves, key=lambda m: cost(*m), default=None)
+        if pick is None or cost(*pick) >= best - 1e-3:
+            return first, roots, best, alone
+        first, roots = pick
+        best = cost(first, roots)
 
 
 def plan_of(method: str, rec: dict) -> dict:
@@ -173,17 +194,21 @@ def plan_of(method: str, rec: dict) -> dict:
     from lumos.kernels.cache import closure_stamp
 
     candidates = {int(i) for i in rec["args"]}
-    roots, finish, alone = choose(rec["excl"], rec["calls"], candidates, rec["bvh_s"])
-    entries = []
-    for r in roots:
-        module, name = rec["order"][r]
-        entries.append({"module": module, "name": name, "stamp": closure_stamp(resolve(module, name).py_func),
+    first, roots, finish, alone = choose(rec["excl"], rec["calls"], candidates, rec["bvh_s"])
+
+    def entries(picked):
+        out = []
+        for r in picked:
+            module, name = rec["order"][r]
+            out.append({"module": module, "name": name, "stamp": closure_stamp(resolve(module, name).py_func),
                         "args": rec["args"][str(r)]})
+        return out
+
     return {"method": method, "top": list(TOPS[method]),
             "recorded": {"date": time.strftime("%Y-%m-%d"), "machine": platform.processor() or platform.machine(),
                          "compile_alone_s": round(alone, 2), "bvh_s": round(rec["bvh_s"], 2),
                          "predicted_s": round(finish, 2), "functions": len(rec["order"])},
-            "roots": entries}
+            "first": entries(first), "roots": entries(roots)}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -206,8 +231,9 @@ def main(argv: list[str] | None = None) -> int:
         PLAN_DIR.mkdir(exist_ok=True)
         (PLAN_DIR / f"{method}.json").write_text(json.dumps(plan, indent=1) + "\n")
         rec = plan["recorded"]
-        print(f"{method}: {rec['functions']} functions, {rec['compile_alone_s']} s alone; with the helper's "
-              f"{len(plan['roots'])} roots (then the BVH build's {rec['bvh_s']} s) about {rec['predicted_s']} s")
+        print(f"{method}: {rec['functions']} functions, {rec['compile_alone_s']} s alone; about "
+              f"{rec['predicted_s']} s with {len(plan['first'])} subtrees first and {len(plan['roots'])} in the helper "
+              f"(then the BVH build's {rec['bvh_s']} s)")
     return 0
 
 
