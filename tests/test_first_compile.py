@@ -1,5 +1,5 @@
 """A first run on a cold cache compiles the method's kernels while another process compiles the BVH build's
-(`api.compile_beside_bvh`): against the scene compiled with an empty tree, whose arrays have the types of the
+(`api.compile_with_helper`): against the scene compiled with an empty tree, whose arrays have the types of the
 real one, so that nothing compiles twice."""
 
 from __future__ import annotations
@@ -43,9 +43,9 @@ def test_has_entries_tells_a_cold_cache(tmp_path, monkeypatch):
 
 
 def test_a_cold_first_render_compiles_beside_the_bvh_build(monkeypatch):
-    """With the BVH build's kernels not cached, render starts `lumos warmup --methods bvh` in a process of its
-    own, renders the scene compiled without its tree at 2×2 (compiling the method's kernels), waits for the
-    process, then renders as always: the same image."""
+    """With the method's and the BVH build's kernels not cached, render starts `lumos warmup --plan raycast
+    --methods bvh` in a process of its own, renders the scene compiled without its tree at 2×2 (compiling the
+    method's kernels), waits for the process, then renders as always: the same image."""
     import lumos.kernels.cache as cache
     from lumos import methods
 
@@ -70,7 +70,8 @@ def test_a_cold_first_render_compiles_beside_the_bvh_build(monkeypatch):
     monkeypatch.setattr(methods, "compile_for", recording)
     monkeypatch.setattr(api, "compile_for", recording, raising=False)
     got = lumos.render(SHOWCASE, method="raycast", width=40, height=30, spp=1).array
-    assert started and started[0][1:5] == ["-m", "lumos", "warmup", "--methods"] and "bvh" in started[0]
+    assert started and started[0][1:4] == ["-m", "lumos", "warmup"]
+    assert started[0][-4:] == ["--plan", "raycast", "--methods", "bvh"]  # raycast's compile plan, then the BVH
     assert trees == [(False, 2), (True, 40)]
     np.testing.assert_array_equal(got, want)
 

@@ -97,22 +97,21 @@ def entry_point(name: str) -> Callable:
     return getattr(importlib.import_module(module), func)
 
 
-#: The methods whose first run compiles its kernels while a process of its own compiles the BVH build's
-#: (`compile_beside_bvh`; raster only with shadow rays, which need the tree); radiosity builds its trees in its
-#: solve, whose kernels wait on them.
-BESIDE_BVH = ("raycast", "raster", "whitted", "path")
+#: The methods whose first run compiles its kernels beside a helper process (`compile_with_helper`); radiosity
+#: builds its trees in its solve, whose kernels wait on them.
+WITH_HELPER = ("raycast", "raster", "whitted", "path")
 
 
-def compile_beside_bvh(scene, cfg) -> None:
-    """On a first run with something to compile, compile the method's kernels while a second process
-    (`lumos warmup --methods bvh [--plan METHOD]`) compiles, on another core, the BVH build's kernels where they
-    are not cached, and first, where the method has a compile plan and its kernel is not cached, the device
-    functions the plan gives it (`kernels.plan`), which this compile then loads as it reaches them (this process
-    compiles the plan's `first` subtrees before its kernel, so that the two start apart). The kernels
-    need the scene's array types, not its tree, so they compile against the scene compiled with an empty one
-    (`compile_for(..., tree=False)`), rendered at 2×2 and thrown away; the compile that follows loads the BVH
-    build's kernels, and the render finds its own compiled (BENCHMARKS.md, 2026-12-05, seventh and eighth
-    sessions). `LUMOS_COMPILE_HELPER=0` compiles everything in this process."""
+def compile_with_helper(scene, cfg) -> None:
+    """On a first run with something to compile, compile the method's kernels while a second process compiles, on
+    another core, `lumos warmup --plan METHOD --methods bvh`: first the device functions the method's compile plan
+    gives it (`kernels.plan`; when the method's kernel is not cached), which this compile loads as it reaches
+    them, then the BVH build's kernels (when they are not cached and the method traces rays: raster only with
+    shadow rays). Meanwhile this process compiles the plan's `first` subtrees, so that the two start apart, and
+    then the method's kernels, which need the scene's array types, not its tree: against the scene compiled with
+    an empty one (`compile_for(..., tree=False)`), rendered at 2×2 and thrown away. The compile that follows
+    loads the BVH build's kernels, and the render finds its own compiled: the same image (BENCHMARKS.md,
+    2026-12-05, seventh and eighth sessions). `LUMOS_COMPILE_HELPER=0` compiles everything in this process."""
     import os
     import subprocess
 
@@ -124,12 +123,14 @@ def compile_beside_bvh(scene, cfg) -> None:
     if (os.cpu_count() or 1) < 2 or os.environ.get("LUMOS_COMPILE_HELPER") == "0":
         return
     share = bool(plan.load(cfg.method)["roots"]) and not plan.top_cached(cfg.method)
-    if not share and has_entries(build_nodes):
+    bvh = (cfg.method != "raster" or cfg.shadows) and not has_entries(build_nodes)
+    if not (share or bvh):
         return
-    command = [sys.executable, "-m", "lumos", "warmup", "--methods", "bvh", "--jobs", "1", "--quiet"]
+    command = [sys.executable, "-m", "lumos", "warmup", "--jobs", "1", "--quiet"]
+    command += (["--plan", cfg.method] if share else []) + (["--methods", "bvh"] if bvh else [])
     try:
-        helper = subprocess.Popen(command + (["--plan", cfg.method] if share else []), stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        helper = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.DEVNULL)
     except OSError:  # no process to be had here: everything compiles in this one, as it would have
         return
     try:
@@ -142,7 +143,7 @@ def compile_beside_bvh(scene, cfg) -> None:
     finally:
         try:
             helper.wait(timeout=600)
-        except subprocess.TimeoutExpired:  # (never seen: the BVH build's compile takes seconds)
+        except subprocess.TimeoutExpired:  # (never seen: the helper's compile takes seconds)
             helper.kill()
 
 
@@ -196,9 +197,8 @@ def render(scene: Scene | dict | str, progress: bool | Callable[[float], None] =
                   "next runs; `lumos warmup` compiles them all ahead)", file=sys.stderr, flush=True)
 
     with watch_compiles(on_first=say_compiling) as watch:
-        if (cfg.method in BESIDE_BVH and (cfg.method != "raster" or cfg.shadows) and solution is None
-                and client is None and checkpoint is None):
-            compile_beside_bvh(scene, cfg)
+        if cfg.method in WITH_HELPER and solution is None and client is None and checkpoint is None:
+            compile_with_helper(scene, cfg)
         try:
             compiled = compile_for(scene, cfg, solved=solution is not None)
         except LumosError as exc:  # the compile step knows the key path, not the file: name it

@@ -226,8 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
                       "bvh, raycast, raster, whitted, path, radiosity, queries")
     warm.add_argument("--jobs", type=int, metavar="N", help="processes at once (default: one per core)")
     warm.add_argument("--quiet", action="store_true", help="print nothing")
-    warm.add_argument("--plan", metavar="METHOD", help="first compile the device functions METHOD's compile plan "
-                      "gives a helper (what a cold first render runs beside its own compile: lumos.kernels.plan)")
+    warm.add_argument("--plan", metavar="METHOD", help="compile the device functions METHOD's compile plan gives "
+                      "a helper (what a cold first render runs beside its own compile: lumos.kernels.plan), then "
+                      "only the families --methods names")
     warm.set_defaults(run=run_warmup)
 
     info = commands.add_parser("info", help="print what a scene holds")
@@ -663,6 +664,8 @@ def run_warmup(args: argparse.Namespace, started: float) -> int:
         if args.plan not in METHODS:
             raise LumosError(f"--plan: unknown method {args.plan!r} (choose from {', '.join(METHODS)})")
         plan.compile_share(args.plan)
+        if not args.methods:
+            return 0
     return warmup.main(families, jobs=args.jobs, quiet=args.quiet)
 
 

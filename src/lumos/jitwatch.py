@@ -21,11 +21,11 @@ from typing import Callable, Iterator, Optional
 
 from numba.core import event
 
-#: About how long a first run compiles every kernel of a method on one of two cores (a first render on a fresh
-#: cache, its `jit_s`: BENCHMARKS.md, 2026-12-05, seventh session), when no warm-up has measured it on this
-#: machine; raycast, whitted, path and raster with shadows compile the BVH build's kernels on the other core
-#: meanwhile (`api.compile_beside_bvh`), radiosity in its own process.
-ESTIMATE_S = {"raycast": 11, "raster": 13, "whitted": 19, "path": 19, "radiosity": 11}
+#: About how long a first run compiles every kernel of a method on two cores (a first render on a fresh cache, its
+#: `jit_s`: BENCHMARKS.md, 2026-12-05, eighth session), when no warm-up has measured it on this machine; raycast,
+#: raster, whitted and path share their compile with a helper process on the other core, which also compiles the
+#: BVH build's kernels (`api.compile_with_helper`), radiosity compiles in its own process.
+ESTIMATE_S = {"raycast": 8, "raster": 8, "whitted": 14, "path": 17, "radiosity": 11}
 
 
 #: the file beside the kernels where `lumos warmup` keeps what each kernel family took to compile

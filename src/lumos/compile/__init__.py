@@ -264,7 +264,7 @@ def compile_scene(scene, reuse: Optional[CompiledScene] = None, tree: bool = Tru
     the same to the bit (an edit of materials or lights only: the live preview), and `bvh_build_s` is 0. With
     `tree` False the BVH is an empty one, and the triangles with it: arrays of the same types that hold nothing
     to hit (what a first run compiles the methods' kernels against while the BVH build's kernels compile
-    elsewhere: `api.compile_beside_bvh`)."""
+    elsewhere: `api.compile_with_helper`)."""
     materials = _Materials(environment_lights_model(scene))
     shapes = _Shapes(scene.camera.shutter)
     tri_parts = []  # (verts, normals, uvs, material, object)

@@ -16,7 +16,7 @@ was recorded (`cache.closure_stamp`): a root whose sources have changed since is
 nothing but the help it no longer gives, and the kernels compiled are always those of the sources as they are.
 
     compile_share("whitted")             # in the helper process (`lumos warmup --plan whitted`)
-    compile_share("whitted", "first")    # in the render's, before its kernel (`api.compile_beside_bvh`)
+    compile_share("whitted", "first")    # in the render's, before its kernel (`api.compile_with_helper`)
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """Record the compile plans a cold first render shares with a helper process (`kernels.plan`).
 
-    python -m lumos.tools.plans                     # whitted and path, from a checkout (it renders its examples)
+    python -m lumos.tools.plans                     # raycast, raster, whitted, path, from a checkout (it renders
+                                                    # its examples)
     python -m lumos.tools.plans --methods path
 
 For each method, a child process renders the method's example at 160×120, 1 spp, on an empty kernel cache, with
@@ -25,10 +26,12 @@ from pathlib import Path
 
 from ..kernels.plan import PLAN_DIR, encode_args, resolve
 
-#: what each planned method's first render is recorded on (bench_first_image's scenes)
-SCENES = {"whitted": "showcase.yaml", "path": "path/cornell.yaml"}
-#: the top-level kernel of each planned method's first render
-TOPS = {"whitted": ("lumos.methods.whitted_pixels", "pixel_rows"), "path": ("lumos.methods.path_trace", "pass_rows")}
+#: what each planned method's first render is recorded on (bench_first_image's scenes): the methods whose first
+#: render compiles beside a helper (`api.WITH_HELPER`)
+SCENES = {"raycast": "showcase.yaml", "raster": "showcase.yaml", "whitted": "showcase.yaml",
+          "path": "path/cornell.yaml"}
+#: the modules of the BVH build's kernels, which the helper compiles after its share (`lumos warmup --methods bvh`)
+BVH_MODULES = ("lumos.kernels.bvh_build",)
 #: the helper starts this much later than the render's compile (its own imports, against the render's imports,
 #: scene and empty-tree compile), and loading an entry another process compiled costs about this (seconds)
 HELPER_START_S = 0.3
@@ -38,8 +41,9 @@ LOAD_S = 0.01
 def record(method: str, examples: Path) -> dict:
     """What a cold first render of `method` compiles, in this process: {order: [[module, name], ...] in the order
     their compiles finished, excl: seconds each, calls: [[caller, callee], ...] (indices into order), args:
-    {index: encoded argument types} for the device functions, bvh_s: the compile time outside the method's
-    top-level kernel (the BVH build's, which the helper compiles after its share)}."""
+    {index: encoded argument types} for the device functions, top: the top-level kernel that took longest, bvh_s:
+    the compile time of the BVH build's kernels (which the helper compiles after its share), left out of the
+    rest}."""
     import time as _time
 
     from numba.core import event
@@ -47,7 +51,7 @@ def record(method: str, examples: Path) -> dict:
     import lumos
     from lumos.kernels.jit import DeviceDispatcher
 
-    top = TOPS[method]
+    tops: dict[tuple, float] = {}  # the top-level kernels, and their whole compile
     stack: list[list] = []  # [key, start, nested]
     order: list[tuple] = []
     excl: dict[tuple, float] = {}
@@ -62,8 +66,9 @@ def record(method: str, examples: Path) -> dict:
     class Compiles(event.Listener):
         def on_start(self, ev):
             key = key_of(ev.data["dispatcher"])
-            if not stack and key == top:
+            if not stack and key[0] not in BVH_MODULES:
                 inside[0] = True
+                tops.setdefault(key, 0.0)
             stack.append([key, _time.perf_counter(), 0.0])
 
         def on_end(self, ev):
@@ -87,6 +92,7 @@ def record(method: str, examples: Path) -> dict:
             excl[key] += took - nested
             if not stack:
                 inside[0] = False
+                tops[key] += took
 
     plain_template = DeviceDispatcher.get_call_template
 
@@ -102,7 +108,8 @@ def record(method: str, examples: Path) -> dict:
     index = {key: i for i, key in enumerate(order)}
     return {"order": [list(k) for k in order], "excl": [excl[k] for k in order],
             "calls": sorted([index[a], index[b]] for a, b in calls if a in index and b in index),
-            "args": {str(index[k]): v for k, v in args.items()}, "bvh_s": outside[0]}
+            "args": {str(index[k]): v for k, v in args.items()}, "top": list(max(tops, key=tops.get)),
+            "bvh_s": outside[0]}
 
 
 def _closures(n: int, calls: list) -> list[list[int]]:
@@ -204,7 +211,7 @@ def plan_of(method: str, rec: dict) -> dict:
                         "args": rec["args"][str(r)]})
         return out
 
-    return {"method": method, "top": list(TOPS[method]),
+    return {"method": method, "top": rec["top"],
             "recorded": {"date": time.strftime("%Y-%m-%d"), "machine": platform.processor() or platform.machine(),
                          "compile_alone_s": round(alone, 2), "bvh_s": round(rec["bvh_s"], 2),
                          "predicted_s": round(finish, 2), "functions": len(rec["order"])},
@@ -213,7 +220,7 @@ def plan_of(method: str, rec: dict) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--methods", default=",".join(TOPS), help="methods to record (default: %(default)s)")
+    ap.add_argument("--methods", default=",".join(SCENES), help="methods to record (default: %(default)s)")
     ap.add_argument("--examples", type=Path, default=Path(__file__).resolve().parents[3] / "examples",
                     help="the checkout's examples folder (default: %(default)s)")
     ap.add_argument("--child", metavar="METHOD", help=argparse.SUPPRESS)
