@@ -226,6 +226,56 @@ def test_a_kernel_in_another_process_loads_the_device_functions_it_shares(tmp_pa
     assert edited["compiled"] == ["second"] and edited["out"] == [2.0, 5.0, 8.0, 11.0]
 
 
+CLAIMING_CHILD = SHARING_CHILD.replace("""event.register("numba:compile", Count())""", """event.register("numba:compile", Count())
+import time
+class Slow(event.Listener):  # a compile of g that takes a while (with its claim held)
+    def on_start(self, ev):
+        if ev.data["dispatcher"].py_func.__name__ == "g" and len(sys.argv) > 3:
+            print("compiling g", flush=True)
+            time.sleep(float(sys.argv[3]))
+    def on_end(self, ev):
+        pass
+event.register("numba:compile", Slow())""")
+assert "Slow()" in CLAIMING_CHILD
+
+
+def _claiming_child(root: Path, cache_dir: Path, kernel: str, *slow: str) -> subprocess.Popen:
+    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache_dir))
+    env.pop("NUMBA_CACHE_DIR", None)
+    return subprocess.Popen([sys.executable, "-c", CLAIMING_CHILD, str(root), kernel, *slow], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _started_compiling_g(proc: subprocess.Popen) -> None:
+    line = proc.stdout.readline()
+    assert line.strip() == "compiling g", proc.stderr.read()
+
+
+def test_a_device_function_another_process_is_compiling_is_waited_for_not_compiled_again(tmp_path):
+    """Two processes that need the same device function at once: the second finds the first's claim on it,
+    waits, and loads what the first compiled (the warm-up's families and a cold render's helper share their
+    device functions so). A claim left by a process that died is not waited for."""
+    write_sharing_package(tmp_path)
+    cache_dir = tmp_path / "cache"
+    first = _claiming_child(tmp_path, cache_dir, "first", "2.0")
+    _started_compiling_g(first)  # its claim on g is held from here for 2 s
+    second = run_sharing_child(tmp_path, cache_dir, "second")
+    out, err = first.communicate(timeout=300)
+    assert first.returncode == 0, err
+    assert json.loads(out.strip().splitlines()[-1])["compiled"] == ["first", "g", "h"]
+    assert second["compiled"] == ["second"] and second["out"] == [0.0, 2.0, 4.0, 6.0]
+    assert not list(cache_dir.rglob("*.claim"))  # every claim dropped once its entry was saved
+
+    cache_dir = tmp_path / "cache2"
+    dying = _claiming_child(tmp_path, cache_dir, "first", "600")
+    _started_compiling_g(dying)
+    dying.kill()
+    dying.wait()
+    assert list(cache_dir.rglob("*.claim"))  # left behind
+    second = run_sharing_child(tmp_path, cache_dir, "second")  # (would wait CLAIM_WAIT_S for a live one)
+    assert second["compiled"] == ["g", "h", "second"] and second["out"] == [0.0, 2.0, 4.0, 6.0]
+
+
 def test_cache_folders_follow_the_environment(tmp_path, monkeypatch):
     monkeypatch.setenv("LUMOS_CACHE_DIR", str(tmp_path / "mine"))
     assert cache.cache_dirs() == ((tmp_path / "mine").resolve(),)

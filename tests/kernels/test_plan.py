@@ -15,7 +15,7 @@ import pytest
 from lumos.kernels import plan
 from lumos.kernels.cache import closure_stamp
 from lumos.kernels.jit import DeviceDispatcher
-from lumos.tools.plans import choose, simulate
+from lumos.tools.plans import HELPER_START_S, choose, simulate
 
 CHILD = textwrap.dedent("""
     import json, sys
@@ -129,12 +129,12 @@ def test_the_simulation_of_both_processes():
 
 def test_the_plan_splits_the_call_graph_between_the_two():
     first, roots, finish, alone = choose(EXCL, CALLS, {0, 1, 2, 3}, bvh_s=0.0)
-    assert alone == 7.0 and finish == pytest.approx(5.01)  # one leaf's compile off the render's 7 s
+    assert alone == 7.0 and finish < alone - 0.9  # about a leaf's compile off the render's 7 s
     t_main, t_helper = simulate(first, roots, EXCL, CLOSURES)
     assert finish == pytest.approx(max(t_main, t_helper)) and roots and not set(first) & set(roots)
     # a helper that must compile the BVH build's kernels for longer than the whole render takes no share
     first, roots, finish, alone = choose(EXCL, CALLS, {0, 1, 2, 3}, bvh_s=10.0)
-    assert roots == [] and finish == pytest.approx(10.3)
+    assert roots == [] and finish == pytest.approx(HELPER_START_S + 10.0)
 
 
 @pytest.mark.parametrize("path", sorted(plan.PLAN_DIR.glob("*.json")), ids=lambda p: p.stem)

@@ -19,6 +19,14 @@ The folders (`cache_dirs`), in the order they are read:
 
 Entries are written whole (Numba writes a temporary file and renames it) and the index of a function is updated
 under a file lock, so processes warming the same cache in parallel (`lumos warmup`) lose no entry.
+
+**One compile per entry, whichever process gets there first.** A process that finds no entry *claims* it (a
+`.claim` file beside the index, made with O_EXCL, holding its process id) before compiling, and drops the claim
+once the entry is saved (or the compile failed). Another process that needs the same entry meanwhile waits for it
+and loads it, instead of compiling it a second time on the other core: the warm-up's families share device
+functions, and a cold render shares its compile with a helper process (`plan`). A claim whose process is gone,
+or that is held longer than `CLAIM_WAIT_S`, is not waited for. Waiting cannot deadlock: a process waits only
+from inside the compile of a caller of the claimed function, and the call graph has no cycles.
 """
 
 from __future__ import annotations
@@ -28,6 +36,7 @@ import dis
 import hashlib
 import os
 import sys
+import time
 import types
 from functools import lru_cache
 from pathlib import Path
@@ -296,17 +305,47 @@ def _folder_lock(folder: str):
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
+#: the longest a compile waits for an entry another process has claimed (seconds; the longest compile of one
+#: function, a method's top-level kernel with its callees, takes about 20 s on a slow core)
+CLAIM_WAIT_S = 120.0
+_POLL_S = 0.005
+
+
+def _claim_holder(path: str):
+    """The process id a claim file holds, 0 while its writer has not written it yet, None if it is gone."""
+    try:
+        with open(path) as handle:
+            text = handle.read().strip()
+    except OSError:
+        return None
+    return int(text) if text.isdigit() else 0
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # (someone else's process: alive)
+        return True
+    return True
+
+
 class KernelCache(FunctionCache):
     """Numba's function cache, stamped with the source closure, read from every folder of `cache_dirs` and
-    written to the first; the stamp is computed when the cache is first used, not when the kernel is defined."""
+    written to the first, with a claim on an entry while it compiles (the module's docstring); the stamp is
+    computed when the cache is first used, not when the kernel is defined."""
 
     _impl_class = _KernelCacheImpl
+    #: whether entries are claimed while they compile
+    claims = True
 
     def __init__(self, py_func):  # Numba's __init__ stamps eagerly; everything else is Numba's
         self._name = repr(py_func)
         self._py_func = py_func
         self._impl = self._impl_class(py_func)
         self._files = None
+        self._held: dict[str, str] = {}  # the claims this process holds: repr(key) -> file
         self.enable()
 
     @property
@@ -332,7 +371,61 @@ class KernelCache(FunctionCache):
         the runtime's functions to link against, initialised here."""
         rtsys.initialize(target_context)
         with self._guard_against_spurious_io_errors():
-            return self._load_overload(sig, target_context)
+            data = self._load_overload(sig, target_context)
+            if data is None and self.claims and self._enabled:
+                data = self._claim_or_wait(sig, target_context)
+            return data
+
+    def _claim_or_wait(self, sig, target_context):
+        """Claim the entry for `sig` (then return None: the caller compiles it and `save_overload` drops the
+        claim), or, while another live process holds the claim, wait for the entry and return it loaded."""
+        key = self._index_key(sig, target_context.codegen())
+        if key is None:
+            return None
+        name = repr(key)
+        digest = hashlib.sha256(name.encode()).hexdigest()[:24]
+        path = os.path.join(self._impl.locator.get_cache_path(), f"{self._impl.filename_base}.{digest}.claim")
+        deadline = time.monotonic() + CLAIM_WAIT_S
+        unwritten_since = None
+        while True:
+            try:
+                os.makedirs(os.path.dirname(path), exist_ok=True)
+                fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                holder = _claim_holder(path)
+                if holder == 0:  # being written, or left empty by a writer that died at once
+                    unwritten_since = unwritten_since or time.monotonic()
+                    stale = time.monotonic() - unwritten_since > 1.0
+                else:
+                    unwritten_since = None
+                    stale = holder is not None and (holder == os.getpid() or not _alive(holder))
+                if stale:
+                    with contextlib.suppress(OSError):
+                        os.unlink(path)
+                    continue
+                if time.monotonic() > deadline:
+                    return None  # compiled here as well, unclaimed
+                time.sleep(_POLL_S)
+                data = self._load_overload(sig, target_context)
+                if data is not None:
+                    return data
+                continue
+            except OSError:  # a folder this process cannot write: no claims, as before them
+                return None
+            with os.fdopen(fd, "w") as handle:
+                handle.write(str(os.getpid()))
+            self._held[name] = path
+            data = self._load_overload(sig, target_context)  # saved between the first look and the claim
+            if data is not None:
+                self.release_claims()
+            return data
+
+    def release_claims(self) -> None:
+        """Drop the claims this process holds on this function's entries (after a save, or a failed compile)."""
+        for path in self._held.values():
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+        self._held.clear()
 
     def _load_overload(self, sig, target_context):
         if not self._enabled:
@@ -351,6 +444,8 @@ class KernelCache(FunctionCache):
             super()._save_overload(sig, data)
         except OSError:
             pass  # an unwritable cache folder: the kernel stays compiled for this process only
+        finally:
+            self.release_claims()
 
 
 class OverloadCache(KernelCache):
@@ -359,6 +454,8 @@ class OverloadCache(KernelCache):
     entry, by the signature, the bytecode and the closure's cell contents (which the overload chose for the
     argument types), and stamped with Numba's version; an implementation whose cells or code do not pickle is
     compiled and not kept."""
+
+    claims = False  # (small, and compiled from inside Numba's typing of a caller: never waited for)
 
     #: the options an implementation takes from the function that calls it (Numba's `inherit_if_not_set`): Numba
     #: keeps one implementation per caller's options in a process, so the cache keys them too (an implementation
@@ -399,6 +496,16 @@ def cached(dispatcher, prefix: str = "", library_class=None, cache_class=KernelC
     if prefix:
         dispatcher._cache._impl._filename_base = f"{prefix}-{dispatcher._cache._impl._filename_base}"
     dispatcher._cache._impl.library_class = library_class
+    if dispatcher._cache.claims:
+        compile_ = dispatcher.compile
+
+        def compile(sig):
+            try:
+                return compile_(sig)
+            finally:  # a compile that failed (a signature Numba refused) leaves no claim behind
+                dispatcher._cache.release_claims()
+
+        dispatcher.compile = compile
     return dispatcher
 
 

@@ -32,9 +32,10 @@ SCENES = {"raycast": "showcase.yaml", "raster": "showcase.yaml", "whitted": "sho
           "path": "path/cornell.yaml"}
 #: the modules of the BVH build's kernels, which the helper compiles after its share (`lumos warmup --methods bvh`)
 BVH_MODULES = ("lumos.kernels.bvh_build",)
-#: the helper starts this much later than the render's compile (its own imports, against the render's imports,
-#: scene and empty-tree compile), and loading an entry another process compiled costs about this (seconds)
-HELPER_START_S = 0.3
+#: the helper's first compile starts this much later than the render's (the render starts it after its imports
+#: and the scene's; then its own interpreter, imports, plan and Numba's first compile: measured from both
+#: processes' compile events), and loading an entry another process compiled costs about this (seconds)
+HELPER_START_S = 1.3
 LOAD_S = 0.01
 
 
