@@ -116,15 +116,17 @@ CLOSURES = [[0], [0, 1], [2], [2, 3], [0, 1, 2, 3, 4]]
 def test_the_simulation_of_both_processes():
     assert simulate([], [], EXCL, CLOSURES, start=0.3) == (7.0, 0.3)
     # the helper takes C's subtree from t = 0.3: leaf 2 done at 2.3, C at 3.3. The render compiles leaf 0 and B
-    # (3.0), loads leaf 2 (done before it got there), compiles C (not done yet when it gets there), then top.
+    # (3.0), loads leaf 2 (done before it got there), waits for C (claimed by the helper at 2.3) until 3.3, loads
+    # it, then compiles top
     t_main, t_helper = simulate([], [3], EXCL, CLOSURES, start=0.3, load=0.01)
-    assert t_main == pytest.approx(3.0 + 0.01 + 1.0 + 1.0) and t_helper == pytest.approx(3.3)
+    assert t_main == pytest.approx(3.3 + 0.01 + 1.0) and t_helper == pytest.approx(3.3)
     # the render compiling C's subtree first and the helper B's, from the same moment: they never meet, and the
-    # render loads B's; a helper 0.3 s late has not finished B when the render gets there, which compiles it
+    # render loads B's
     t_main, t_helper = simulate([3], [1], EXCL, CLOSURES, start=0.0, load=0.01)
     assert t_main == pytest.approx(3.0 + 0.01 + 0.01 + 1.0) and t_helper == pytest.approx(3.0)
-    t_main, t_helper = simulate([3], [1], EXCL, CLOSURES, start=0.3, load=0.01)
-    assert t_main == pytest.approx(3.0 + 0.01 + 1.0 + 1.0) and t_helper == pytest.approx(3.3)
+    # both wanting the same leaf first: the helper, 0.3 s late, finds it claimed, waits and loads it
+    t_main, t_helper = simulate([1], [0], EXCL, CLOSURES, start=0.3, load=0.01)
+    assert t_helper == pytest.approx(2.0 + 0.01) and t_main == pytest.approx(7.0)
 
 
 def test_the_plan_splits_the_call_graph_between_the_two():

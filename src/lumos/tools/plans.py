@@ -135,28 +135,37 @@ def simulate(first: list[int], roots: list[int], excl: list[float], closures: li
              start: float = HELPER_START_S, load: float = LOAD_S) -> tuple[float, float]:
     """When the render's compile and the helper's share end (seconds) if the render compiles the closures of
     `first` in that order and then everything else in the recorded order, while the helper, from `start`,
-    compiles the closures of `roots` in that order: each loads what the other finished before it got there, and
-    compiles the rest (a function both reach at once is compiled twice)."""
+    compiles the closures of `roots` in that order. Each loads what the other has finished when it gets there,
+    waits for what the other is compiling (`cache`'s claims), and compiles the rest."""
     inf = float("inf")
     order, seen = [], set()
     for k in [k for r in first for k in closures[r]] + list(range(len(excl))):
         if k not in seen:
             seen.add(k)
             order.append(k)
+
+    def walk(keys, t, other_start, other_done):
+        began, done = {}, {}
+        for k in keys:
+            if k in done:
+                continue
+            if other_done.get(k, inf) <= t:
+                t += load
+            elif other_start.get(k, inf) <= t:
+                t = other_done[k] + load  # claimed over there: wait for it
+            else:
+                began[k] = t
+                t += excl[k]
+            done[k] = t
+        return t, began, done
+
+    helper_keys = [k for r in roots for k in closures[r]]
+    main_began: dict[int, float] = {}
     main_done: dict[int, float] = {}
-    helper_done: dict[int, float] = {}
     t_main = t_helper = 0.0
-    for _ in range(3):  # each side's timeline depends on the other's: a few rounds settle it
-        t_helper, helper_done = start, {}
-        for r in roots:
-            for k in closures[r]:
-                if k not in helper_done:
-                    t_helper += load if main_done.get(k, inf) <= t_helper else excl[k]
-                    helper_done[k] = t_helper
-        t_main, main_done = 0.0, {}
-        for k in order:
-            t_main += load if helper_done.get(k, inf) <= t_main else excl[k]
-            main_done[k] = t_main
+    for _ in range(4):  # each side's timeline depends on the other's: a few rounds settle it
+        t_helper, helper_began, helper_done = walk(helper_keys, start, main_began, main_done)
+        t_main, main_began, main_done = walk(order, 0.0, helper_began, helper_done)
     return t_main, t_helper
 
 
