@@ -227,7 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
     warm.add_argument("--jobs", type=int, metavar="N", help="processes at once (default: one per core)")
     warm.add_argument("--quiet", action="store_true", help="print nothing")
     warm.add_argument("--plan", metavar="METHOD", help="compile the device functions METHOD's compile plan gives "
-                      "a helper (what a cold first render runs beside its own compile: lumos.kernels.plan), then "
+                      "a helper (what a cold first render runs beside its own compile: lumos.methods.compile_plan), then "
                       "only the families --methods names")
     warm.set_defaults(run=run_warmup)
 
@@ -659,7 +659,7 @@ def run_warmup(args: argparse.Namespace, started: float) -> int:
         raise LumosError("--jobs: give at least 1")
     if args.plan is not None:
         from .api import METHODS
-        from .kernels import plan
+        from .methods import compile_plan as plan
 
         if args.plan not in METHODS:
             raise LumosError(f"--plan: unknown method {args.plan!r} (choose from {', '.join(METHODS)})")

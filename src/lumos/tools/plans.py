@@ -1,4 +1,4 @@
-"""Record the compile plans a cold first render shares with a helper process (`kernels.plan`).
+"""Record the compile plans a cold first render shares with a helper process (`methods.compile_plan`).
 
     python -m lumos.tools.plans                     # raycast, raster, whitted, path, from a checkout (it renders
                                                     # its examples)
@@ -8,8 +8,9 @@ For each method, a child process renders the method's example at 160×120, 1 spp
 no helper, and listens to Numba's compile events: every function compiled under the method's top-level kernel,
 in order, with its own (exclusive) compile time, and which device function calls which. `choose` then picks the
 subtrees a helper process compiles meanwhile and those the render compiles first (simulating both processes on
-those times), and the plan is written to `src/lumos/kernels/plans/<method>.json`. Run it again after changing kernels: roots whose sources changed are
-skipped by the helper until then (the renders stay right, only slower to compile).
+those times), and the plan is written to `src/lumos/methods/plans/<method>.json`. Run it again after changing
+kernels: roots whose sources changed are skipped by the helper until then (the renders stay right, only slower to
+compile).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..kernels.plan import PLAN_DIR, encode_args, resolve
+from ..methods.compile_plan import PLAN_DIR, encode_args, resolve
 
 #: what each planned method's first render is recorded on (bench_first_image's scenes): the methods whose first
 #: render compiles beside a helper (`api.WITH_HELPER`)

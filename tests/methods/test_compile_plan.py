@@ -1,4 +1,4 @@
-"""Compile plans (`lumos.kernels.plan`, recorded by `lumos.tools.plans`): what a helper process compiles beside a
+"""Compile plans (`lumos.methods.compile_plan`, recorded by `lumos.tools.plans`): what a helper process compiles beside a
 cold first render, and how the roots are chosen."""
 
 import base64
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from lumos.kernels import plan
+from lumos.methods import compile_plan as plan
 from lumos.kernels.cache import closure_stamp
 from lumos.kernels.jit import DeviceDispatcher
 from lumos.tools.plans import HELPER_START_S, choose, simulate
@@ -31,7 +31,7 @@ CHILD = textwrap.dedent("""
     event.register("numba:compile", Count())
     import numpy as np
     from numba import types
-    from lumos.kernels import plan
+    from lumos.methods import compile_plan as plan
     from lumos.kernels.cache import closure_stamp
     import ctplan.device as device
     plan.PLAN_DIR = Path(sys.argv[1]) / "plans"

@@ -2,7 +2,7 @@
 
 A method's first render on a cold cache compiles one top-level kernel and the device functions under it, one after
 the other, in the order Numba types them (whitted's and the path tracer's: about 190 and 225 functions, 20 s on
-one core). Device functions are cached on their own (`jit.DeviceLibrary`), so another process can compile some of
+one core). Device functions are cached on their own (`kernels.jit.DeviceLibrary`), so another process can compile some of
 them meanwhile: the render, when its compile reaches one that process has finished, loads it instead.
 
 That process needs to know what to compile before the render's own compile has typed anything: which device
@@ -12,7 +12,7 @@ times and call graph, the subtrees (*roots*) the helper takes, and those the ren
 its top-level kernel (whose compile reaches the others in call order): so the two start on different parts of
 the call graph, and the render finds the helper's done when it gets there. Each root holds its
 function's module and name, its argument types (pickled Numba types) and the stamp of its source closure when it
-was recorded (`cache.closure_stamp`): a root whose sources have changed since is skipped, so a stale plan costs
+was recorded (`kernels.cache.closure_stamp`): a root whose sources have changed since is skipped, so a stale plan costs
 nothing but the help it no longer gives, and the kernels compiled are always those of the sources as they are.
 
     compile_share("whitted")             # in the helper process (`lumos warmup --plan whitted`)
@@ -56,7 +56,7 @@ def resolve(module: str, name: str):
 def top_cached(method: str) -> bool:
     """Whether `method`'s top-level kernel has cache entries for its sources as they are (then there is nothing
     to share: its render loads it). True where the method has no plan."""
-    from .cache import has_entries
+    from ..kernels.cache import has_entries
 
     top = load(method).get("top")
     kernel = resolve(*top) if top else None
@@ -68,7 +68,7 @@ def compile_share(method: str, side: str = "roots") -> int:
     whose sources are as recorded, in the plan's order, into the kernel cache; returns how many were compiled or
     loaded. A root that fails (a type that no longer unpickles, a signature the function no longer takes) is
     skipped: the render compiles whatever it needs itself."""
-    from .cache import closure_stamp
+    from ..kernels.cache import closure_stamp
 
     done = 0
     for root in load(method).get(side, []):
