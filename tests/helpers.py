@@ -86,3 +86,19 @@ def one_line_error(excinfo, path) -> str:
     message = str(excinfo.value)
     assert "\n" not in message and str(path) in message, message
     return message
+
+
+#: The start of a child process's script (`python -c`) that counts Numba's compiles: the names of the functions
+#: compiled (not loaded from the cache), in `compiled`, with the folder `sys.argv[1]` on `sys.path`.
+COUNT_COMPILES = """\
+import json, os, sys
+from numba.core import event
+sys.path.insert(0, sys.argv[1])
+compiled = []
+class Count(event.Listener):
+    def on_start(self, ev):
+        compiled.append(ev.data["dispatcher"].py_func.__name__)
+    def on_end(self, ev):
+        pass
+event.register("numba:compile", Count())
+"""

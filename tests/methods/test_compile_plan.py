@@ -12,23 +12,15 @@ from pathlib import Path
 
 import pytest
 
-from lumos.methods import compile_plan as plan
 from lumos.kernels.cache import closure_stamp
 from lumos.kernels.jit import DeviceDispatcher
+from lumos.methods import compile_plan as plan
 from lumos.tools.plans import HELPER_START_S, choose, simulate
 
-CHILD = textwrap.dedent("""
-    import json, sys
+from helpers import COUNT_COMPILES
+
+CHILD = COUNT_COMPILES + textwrap.dedent("""
     from pathlib import Path
-    from numba.core import event
-    sys.path.insert(0, sys.argv[1])
-    compiled = []
-    class Count(event.Listener):
-        def on_start(self, ev):
-            compiled.append(ev.data["dispatcher"].py_func.__name__)
-        def on_end(self, ev):
-            pass
-    event.register("numba:compile", Count())
     import numpy as np
     from numba import types
     from lumos.methods import compile_plan as plan
