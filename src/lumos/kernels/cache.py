@@ -21,7 +21,7 @@ Entries are written whole (Numba writes a temporary file and renames it) and the
 under a file lock, so processes warming the same cache in parallel (`lumos warmup`) lose no entry.
 
 **One compile per entry, whichever process gets there first.** A process that finds no entry *claims* it (a
-`.claim` file beside the index, made with O_EXCL, holding its process id) before compiling, and drops the claim
+`.claim` file beside the index, made with O_EXCL, holding its host and process id) before compiling, and drops the claim
 once the entry is saved (or the compile failed). Another process that needs the same entry meanwhile waits for it
 and loads it, instead of compiling it a second time on the other core: the warm-up's families share device
 functions, and a cold render shares its compile with a helper process (`methods.compile_plan`). A claim whose process is gone,
@@ -35,6 +35,7 @@ import contextlib
 import dis
 import hashlib
 import os
+import socket
 import sys
 import time
 import types
@@ -311,20 +312,28 @@ CLAIM_WAIT_S = 120.0
 _POLL_S = 0.005
 
 
+_HOST = socket.gethostname()
+
+
 def _claim_holder(path: str):
-    """The process id a claim file holds, 0 while its writer has not written it yet, None if it is gone."""
+    """The process a claim file names ("host pid"), "" while its writer has not written it yet, None if it is
+    gone."""
     try:
         with open(path) as handle:
-            text = handle.read().strip()
+            return handle.read().strip()
     except OSError:
         return None
-    return int(text) if text.isdigit() else 0
 
 
-def _alive(pid: int) -> bool:
+def _alive(holder: str) -> bool:
+    """Whether the claim's process is running: on another host (a cache folder shared by cluster workers) it is
+    taken to be, and `CLAIM_WAIT_S` bounds the wait."""
+    host, _, pid = holder.rpartition(" ")
+    if host != _HOST:
+        return True
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+        os.kill(int(pid), 0)
+    except (ProcessLookupError, ValueError):
         return False
     except OSError:  # (someone else's process: alive)
         return True
@@ -393,12 +402,12 @@ class KernelCache(FunctionCache):
                 fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
             except FileExistsError:
                 holder = _claim_holder(path)
-                if holder == 0:  # being written, or left empty by a writer that died at once
+                if holder == "":  # being written, or left empty by a writer that died at once
                     unwritten_since = unwritten_since or time.monotonic()
                     stale = time.monotonic() - unwritten_since > 1.0
                 else:
                     unwritten_since = None
-                    stale = holder is not None and (holder == os.getpid() or not _alive(holder))
+                    stale = holder is not None and (holder == f"{_HOST} {os.getpid()}" or not _alive(holder))
                 if stale:
                     with contextlib.suppress(OSError):
                         os.unlink(path)
@@ -413,7 +422,7 @@ class KernelCache(FunctionCache):
             except OSError:  # a folder this process cannot write: no claims, as before them
                 return None
             with os.fdopen(fd, "w") as handle:
-                handle.write(str(os.getpid()))
+                handle.write(f"{_HOST} {os.getpid()}")
             self._held[name] = path
             data = self._load_overload(sig, target_context)  # saved between the first look and the claim
             if data is not None:
