@@ -193,7 +193,9 @@ def trace_path(geo, surf, lit, tex, em, o, d, time, max_depth, mode, sampler, po
     eta_scale = 1.0  # 1/η² of the refractions so far: roulette looks at the throughput without them
     rays = 0
     n_media = 0
-    prev_delta = True  # the camera ray, and rays from mirrors and glass, see emitters with full weight
+    # the camera ray, and rays from mirrors and glass, see emitters with full weight (a plain bool from the start:
+    # a literal True here had Numba compile `_missed` and `_emission_weight` a second time, for Literal[bool])
+    prev_delta = np.bool_(True)
     prev_pdf = 0.0
     prev_p = o
     prev_n = (0.0, 0.0, 0.0)  # the previous vertex's shading normal: light selection there depends on it
