@@ -105,8 +105,8 @@ WITH_HELPER = ("raycast", "raster", "whitted", "path")
 def compile_with_helper(scene, cfg) -> None:
     """On a first run with something to compile, compile the method's kernels while a second process compiles, on
     another core, `lumos warmup --plan METHOD --methods bvh`: first the device functions the method's compile plan
-    gives it (`methods.compile_plan`; when the method's kernel is not cached), which this compile loads as it reaches
-    them, then the BVH build's kernels (when they are not cached and the method traces rays: raster only with
+    gives it (`methods.compile_plan`; when the method's kernel is not cached), which this compile loads as it
+    reaches them, then the BVH build's kernels (when they are not cached and the method traces rays: raster only with
     shadow rays). Meanwhile this process compiles the plan's `first` subtrees, so that the two start apart, and
     then the method's kernels, which need the scene's array types, not its tree: against the scene compiled with
     an empty one (`compile_for(..., tree=False)`), rendered at 2×2 and thrown away. The compile that follows
@@ -115,10 +115,10 @@ def compile_with_helper(scene, cfg) -> None:
     import os
     import subprocess
 
-    from .methods import compile_plan as plan
     from .kernels.bvh_build import build_nodes
     from .kernels.cache import has_entries
     from .methods import compile_for
+    from .methods import compile_plan as plan
 
     if (os.cpu_count() or 1) < 2 or os.environ.get("LUMOS_COMPILE_HELPER") == "0":
         return

@@ -227,8 +227,8 @@ def build_parser() -> argparse.ArgumentParser:
     warm.add_argument("--jobs", type=int, metavar="N", help="processes at once (default: one per core)")
     warm.add_argument("--quiet", action="store_true", help="print nothing")
     warm.add_argument("--plan", metavar="METHOD", help="compile the device functions METHOD's compile plan gives "
-                      "a helper (what a cold first render runs beside its own compile: lumos.methods.compile_plan), then "
-                      "only the families --methods names")
+                      "a helper (what a cold first render runs beside its own compile: "
+                      "lumos.methods.compile_plan), then only the families --methods names")
     warm.set_defaults(run=run_warmup)
 
     info = commands.add_parser("info", help="print what a scene holds")

@@ -226,7 +226,8 @@ def test_a_kernel_in_another_process_loads_the_device_functions_it_shares(tmp_pa
     assert edited["compiled"] == ["second"] and edited["out"] == [2.0, 5.0, 8.0, 11.0]
 
 
-CLAIMING_CHILD = SHARING_CHILD.replace("""event.register("numba:compile", Count())""", """event.register("numba:compile", Count())
+COUNTING = """event.register("numba:compile", Count())"""
+CLAIMING_CHILD = SHARING_CHILD.replace(COUNTING, COUNTING + """
 import time
 class Slow(event.Listener):  # a compile of g that takes a while (with its claim held)
     def on_start(self, ev):

@@ -1,5 +1,5 @@
-"""Compile plans (`lumos.methods.compile_plan`, recorded by `lumos.tools.plans`): what a helper process compiles beside a
-cold first render, and how the roots are chosen."""
+"""Compile plans (`lumos.methods.compile_plan`, recorded by `lumos.tools.plans`): what a helper process compiles
+beside a cold first render, and how the roots are chosen."""
 
 import base64
 import json

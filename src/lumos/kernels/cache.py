@@ -24,9 +24,9 @@ under a file lock, so processes warming the same cache in parallel (`lumos warmu
 `.claim` file beside the index, made with O_EXCL, holding its host and process id) before compiling, and drops the claim
 once the entry is saved (or the compile failed). Another process that needs the same entry meanwhile waits for it
 and loads it, instead of compiling it a second time on the other core: the warm-up's families share device
-functions, and a cold render shares its compile with a helper process (`methods.compile_plan`). A claim whose process is gone,
-or that is held longer than `CLAIM_WAIT_S`, is not waited for. Waiting cannot deadlock: a process waits only
-from inside the compile of a caller of the claimed function, and the call graph has no cycles.
+functions, and a cold render shares its compile with a helper process (`methods.compile_plan`). A claim whose
+process is gone, or that is held longer than `CLAIM_WAIT_S`, is not waited for. Waiting cannot deadlock: a
+process waits only from inside the compile of a caller of the claimed function, and the call graph has no cycles.
 """
 
 from __future__ import annotations

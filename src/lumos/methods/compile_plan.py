@@ -2,8 +2,9 @@
 
 A method's first render on a cold cache compiles one top-level kernel and the device functions under it, one after
 the other, in the order Numba types them (whitted's and the path tracer's: about 190 and 225 functions, 20 s on
-one core). Device functions are cached on their own (`kernels.jit.DeviceLibrary`), so another process can compile some of
-them meanwhile: the render, when its compile reaches one that process has finished, loads it instead.
+one core). Device functions are cached on their own (`kernels.jit.DeviceLibrary`), so another process can
+compile some of them meanwhile: the render, when its compile reaches one that process has finished, loads it
+instead.
 
 That process needs to know what to compile before the render's own compile has typed anything: which device
 functions, for which argument types. A *plan* (`plans/<method>.json`) says so. It is recorded from a cold render
