@@ -293,6 +293,21 @@ def test_the_compile_estimate_is_what_the_last_warmup_measured(tmp_path, monkeyp
     assert estimate_s("path") == pytest.approx(25.0) and estimate_s("raster") == pytest.approx(35.0)
 
 
+def test_a_warmup_family_renders_without_a_helper_process(monkeypatch):
+    """The warm-up runs a process per core already: its families' first renders start no helper beside them
+    (`LUMOS_COMPILE_HELPER=0` while a family warms, the caller's setting back afterwards)."""
+    from lumos.tools import warmup
+
+    seen = []
+    monkeypatch.setitem(warmup._WORK, "bvh", lambda: seen.append(os.environ.get("LUMOS_COMPILE_HELPER")))
+    monkeypatch.setenv("LUMOS_COMPILE_HELPER", "1")
+    assert warmup.warm_family("bvh").error == ""
+    assert seen == ["0"] and os.environ["LUMOS_COMPILE_HELPER"] == "1"
+    monkeypatch.delenv("LUMOS_COMPILE_HELPER")
+    warmup.warm_family("bvh")
+    assert seen == ["0", "0"] and "LUMOS_COMPILE_HELPER" not in os.environ
+
+
 def test_warmup_refuses_an_unknown_family(capsys):
     from lumos import cli
 
