@@ -15,6 +15,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from helpers import COUNT_COMPILES
 
 import lumos
 from lumos.jitwatch import ESTIMATE_S, estimate_s, save_timings
@@ -142,19 +143,9 @@ def test_parallel_writers_of_one_index_lose_no_entry(tmp_path):
     assert run_child(tmp_path, cache_dir, "int,float,int32,float32")["compiled"] == []
 
 
-SHARING_CHILD = textwrap.dedent("""
-    import json, os, sys
+SHARING_CHILD = COUNT_COMPILES + textwrap.dedent("""
     import numba
-    from numba.core import event
     numba.__version__ = os.environ.get("CT_NUMBA_VERSION", numba.__version__)  # another Numba, as its stamp sees it
-    sys.path.insert(0, sys.argv[1])
-    compiled = []
-    class Count(event.Listener):
-        def on_start(self, ev):
-            compiled.append(ev.data["dispatcher"].py_func.__name__)
-        def on_end(self, ev):
-            pass
-    event.register("numba:compile", Count())
     import numpy as np
     import ctshare.kernels as k
     out = np.zeros(4)

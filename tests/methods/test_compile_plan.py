@@ -11,13 +11,12 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from helpers import COUNT_COMPILES
 
 from lumos.kernels.cache import closure_stamp
 from lumos.kernels.jit import DeviceDispatcher
 from lumos.methods import compile_plan as plan
 from lumos.tools.plans import HELPER_START_S, choose, simulate
-
-from helpers import COUNT_COMPILES
 
 CHILD = COUNT_COMPILES + textwrap.dedent("""
     from pathlib import Path
