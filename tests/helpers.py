@@ -5,6 +5,7 @@ tests/ is on sys.path (`pythonpath` in pyproject.toml), so a test file in any su
 DATA`; fixtures live in conftest.py, the slow reference twins in naive.py and chi2.py beside this file.
 """
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -102,3 +103,36 @@ class Count(event.Listener):
         pass
 event.register("numba:compile", Count())
 """
+
+
+def write_sharing_package(root: Path, g_body: str = "return x * 2.0 + 1.0", second: str = "g(x[i]) - 1.0") -> None:
+    """A package `ctshare` under `root` for the kernel cache's tests: two top-level kernels in one file (`first`,
+    `second`), both calling the device function `g` (which calls `h`) in another (`ctshare.device`)."""
+    pkg = root / "ctshare"
+    pkg.mkdir(exist_ok=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "device.py").write_text(textwrap.dedent(f"""
+        from lumos.kernels.jit import njit, njit_inline
+
+        @njit
+        def h(x):
+            return x * x
+
+        @njit_inline
+        def g(x):
+            {g_body} + h(x) * 0.0
+    """))
+    (pkg / "kernels.py").write_text(textwrap.dedent(f"""
+        from lumos.kernels.jit import njit_serial
+        from .device import g
+
+        @njit_serial
+        def first(x, out):
+            for i in range(x.size):
+                out[i] = g(x[i])
+
+        @njit_serial
+        def second(x, out):
+            for i in range(x.size):
+                out[i] = {second}
+    """))

@@ -15,7 +15,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from helpers import COUNT_COMPILES
+from helpers import COUNT_COMPILES, write_sharing_package
 
 import lumos
 from lumos.jitwatch import ESTIMATE_S, estimate_s, save_timings
@@ -152,38 +152,6 @@ SHARING_CHILD = COUNT_COMPILES + textwrap.dedent("""
     getattr(k, sys.argv[2])(np.arange(4.0), out)
     print(json.dumps({"compiled": sorted(compiled), "out": out.tolist()}))
 """)
-
-
-def write_sharing_package(root: Path, g_body: str = "return x * 2.0 + 1.0", second: str = "g(x[i]) - 1.0") -> None:
-    """Two top-level kernels in one file, both calling the device function `g` (which calls `h`) in another."""
-    pkg = root / "ctshare"
-    pkg.mkdir(exist_ok=True)
-    (pkg / "__init__.py").write_text("")
-    (pkg / "device.py").write_text(textwrap.dedent(f"""
-        from lumos.kernels.jit import njit, njit_inline
-
-        @njit
-        def h(x):
-            return x * x
-
-        @njit_inline
-        def g(x):
-            {g_body} + h(x) * 0.0
-    """))
-    (pkg / "kernels.py").write_text(textwrap.dedent(f"""
-        from lumos.kernels.jit import njit_serial
-        from .device import g
-
-        @njit_serial
-        def first(x, out):
-            for i in range(x.size):
-                out[i] = g(x[i])
-
-        @njit_serial
-        def second(x, out):
-            for i in range(x.size):
-                out[i] = {second}
-    """))
 
 
 def run_sharing_child(root: Path, cache_dir: Path, kernel: str, **extra_env) -> dict:

@@ -11,7 +11,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from helpers import COUNT_COMPILES
+from helpers import COUNT_COMPILES, write_sharing_package
 
 from lumos.kernels.cache import closure_stamp
 from lumos.kernels.jit import DeviceDispatcher
@@ -24,18 +24,18 @@ CHILD = COUNT_COMPILES + textwrap.dedent("""
     from numba import types
     from lumos.methods import compile_plan as plan
     from lumos.kernels.cache import closure_stamp
-    import ctplan.device as device
+    import ctshare.device as device
     plan.PLAN_DIR = Path(sys.argv[1]) / "plans"
     result = {}
     if sys.argv[2] == "record":  # the plan: the helper takes g (and h under it), called with a float64
         plan.PLAN_DIR.mkdir(exist_ok=True)
-        (plan.PLAN_DIR / "m.json").write_text(json.dumps({"top": ["ctplan.kernels", "first"], "roots": [
-            {"module": "ctplan.device", "name": "g", "stamp": closure_stamp(device.g.py_func),
+        (plan.PLAN_DIR / "m.json").write_text(json.dumps({"top": ["ctshare.kernels", "first"], "roots": [
+            {"module": "ctshare.device", "name": "g", "stamp": closure_stamp(device.g.py_func),
              "args": plan.encode_args((types.float64,))}]}))
     elif sys.argv[2] == "share":
         result["shared"] = plan.compile_share("m")
     else:
-        import ctplan.kernels as k
+        import ctshare.kernels as k
         out = np.zeros(4)
         k.first(np.arange(4.0), out)
         result["out"] = out.tolist()
@@ -43,32 +43,6 @@ CHILD = COUNT_COMPILES + textwrap.dedent("""
     result["compiled"] = sorted(compiled)
     print(json.dumps(result))
 """)
-
-
-def _write_package(root: Path, g_body: str = "x * 2.0") -> None:
-    pkg = root / "ctplan"
-    pkg.mkdir(exist_ok=True)
-    (pkg / "__init__.py").write_text("")
-    (pkg / "device.py").write_text(textwrap.dedent(f"""
-        from lumos.kernels.jit import njit
-
-        @njit
-        def h(x):
-            return x + 1.0
-
-        @njit
-        def g(x):
-            return h({g_body})
-    """))
-    (pkg / "kernels.py").write_text(textwrap.dedent("""
-        from lumos.kernels.jit import njit_serial
-        from .device import g
-
-        @njit_serial
-        def first(x, out):
-            for i in range(x.size):
-                out[i] = g(x[i])
-    """))
 
 
 def _child(root: Path, cache: Path, mode: str) -> dict:
@@ -84,14 +58,14 @@ def test_a_helper_compiles_the_plans_roots_and_the_render_loads_them(tmp_path):
     """The helper process compiles a root (and its callees) into the cache; the kernel compiled after it in
     another process compiles only itself. A root whose sources changed since the plan was recorded is skipped,
     never compiled for the recorded stamp, and the kernel then compiles what it needs."""
-    _write_package(tmp_path)
+    write_sharing_package(tmp_path)
     _child(tmp_path, tmp_path / "unused", "record")
     cache = tmp_path / "cache"
     assert _child(tmp_path, cache, "share") == {"shared": 1, "compiled": ["g", "h"]}
     render = _child(tmp_path, cache, "render")
     assert render["compiled"] == ["first"] and render["out"] == [1.0, 3.0, 5.0, 7.0] and render["top_cached"]
 
-    _write_package(tmp_path, g_body="x * 3.0")  # edited after the plan was recorded
+    write_sharing_package(tmp_path, g_body="return x * 3.0 + 1.0")  # edited after the plan was recorded
     cache = tmp_path / "cache2"
     assert _child(tmp_path, cache, "share") == {"shared": 0, "compiled": []}
     render = _child(tmp_path, cache, "render")

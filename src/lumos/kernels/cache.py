@@ -396,9 +396,12 @@ class KernelCache(FunctionCache):
         path = os.path.join(self._impl.locator.get_cache_path(), f"{self._impl.filename_base}.{digest}.claim")
         deadline = time.monotonic() + CLAIM_WAIT_S
         unwritten_since = None
+        try:
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+        except OSError:  # a folder this process cannot write: no claims, as before them
+            return None
         while True:
             try:
-                os.makedirs(os.path.dirname(path), exist_ok=True)
                 fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
             except FileExistsError:
                 holder = _claim_holder(path)

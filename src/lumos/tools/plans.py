@@ -46,12 +46,10 @@ def record(method: str, examples: Path) -> dict:
     {index: encoded argument types} for the device functions, top: the top-level kernel that took longest, bvh_s:
     the compile time of the BVH build's kernels (which the helper compiles after its share), left out of the
     rest}."""
-    import time as _time
-
     from numba.core import event
 
-    import lumos
-    from lumos.kernels.jit import DeviceDispatcher
+    from .. import load_scene, render
+    from ..kernels.jit import DeviceDispatcher
 
     tops: dict[tuple, float] = {}  # the top-level kernels, and their whole compile
     stack: list[list] = []  # [key, start, nested]
@@ -71,11 +69,11 @@ def record(method: str, examples: Path) -> dict:
             if not stack and key[0] not in BVH_MODULES:
                 inside[0] = True
                 tops.setdefault(key, 0.0)
-            stack.append([key, _time.perf_counter(), 0.0])
+            stack.append([key, time.perf_counter(), 0.0])
 
         def on_end(self, ev):
             key, start, nested = stack.pop()
-            took = _time.perf_counter() - start
+            took = time.perf_counter() - start
             if stack:
                 stack[-1][2] += took
             if not inside[0]:
@@ -105,8 +103,7 @@ def record(method: str, examples: Path) -> dict:
 
     DeviceDispatcher.get_call_template = get_call_template
     event.register("numba:compile", Compiles())
-    scene = lumos.load_scene(examples / SCENES[method])
-    lumos.render(scene, method=method, width=160, height=120, spp=1)
+    render(load_scene(examples / SCENES[method]), method=method, width=160, height=120, spp=1)
     index = {key: i for i, key in enumerate(order)}
     return {"order": [list(k) for k in order], "excl": [excl[k] for k in order],
             "calls": sorted([index[a], index[b]] for a, b in calls if a in index and b in index),
@@ -209,7 +206,7 @@ def choose(excl: list[float], calls: list, candidates: set[int], bvh_s: float):
 
 def plan_of(method: str, rec: dict) -> dict:
     """The plan JSON object for `method` from a `record`ing."""
-    from lumos.kernels.cache import closure_stamp
+    from ..kernels.cache import closure_stamp
 
     candidates = {int(i) for i in rec["args"]}
     first, roots, finish, alone = choose(rec["excl"], rec["calls"], candidates, rec["bvh_s"])
