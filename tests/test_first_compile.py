@@ -45,7 +45,8 @@ def test_has_entries_tells_a_cold_cache(tmp_path, monkeypatch):
 def test_a_cold_first_render_compiles_beside_the_bvh_build(monkeypatch):
     """With the method's and the BVH build's kernels not cached, render starts `lumos warmup --plan raycast
     --methods bvh` in a process of its own, renders the scene compiled without its tree at 2×2 (compiling the
-    method's kernels), waits for the process, then renders as always: the same image."""
+    method's kernels), waits for the process, then renders as always: the same image. Its kernels compiled for a
+    plain scene's lean arrays (`compile.features`) have a plan of their own, `raycast-lean`."""
     import lumos.kernels.cache as cache
     from lumos import methods
 
@@ -66,6 +67,7 @@ def test_a_cold_first_render_compiles_beside_the_bvh_build(monkeypatch):
 
     want = lumos.render(SHOWCASE, method="raycast", width=40, height=30, spp=1).array
     monkeypatch.setattr(cache, "has_entries", lambda dispatcher: False)
+    monkeypatch.setattr(cache, "has_entry_for", lambda dispatcher, arrays: False)
     monkeypatch.setattr("subprocess.Popen", Process)
     monkeypatch.setattr(methods, "compile_for", recording)
     monkeypatch.setattr(api, "compile_for", recording, raising=False)
@@ -74,6 +76,10 @@ def test_a_cold_first_render_compiles_beside_the_bvh_build(monkeypatch):
     assert started[0][-4:] == ["--plan", "raycast", "--methods", "bvh"]  # raycast's compile plan, then the BVH
     assert trees == [(False, 2), (True, 40)]
     np.testing.assert_array_equal(got, want)
+    monkeypatch.setenv("LUMOS_LEAN_KERNELS", "1")
+    started.clear()
+    lumos.render(SHOWCASE, method="raycast", width=40, height=30, spp=1)
+    assert started[0][-4:] == ["--plan", "raycast-lean", "--methods", "bvh"]
 
 
 def test_a_warm_cache_and_a_saved_solution_start_no_process(monkeypatch):

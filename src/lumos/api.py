@@ -104,14 +104,15 @@ WITH_HELPER = ("raycast", "raster", "whitted", "path")
 
 def compile_with_helper(scene, cfg) -> None:
     """On a first run with something to compile, compile the method's kernels while a second process compiles, on
-    another core, `lumos warmup --plan METHOD --methods bvh`: first the device functions the method's compile plan
-    gives it (`methods.compile_plan`; when the method's kernel is not cached), which this compile loads as it
-    reaches them, then the BVH build's kernels (when they are not cached and the method traces rays: raster only with
-    shadow rays). Meanwhile this process compiles the plan's `first` subtrees, so that the two start apart, and
-    then the method's kernels, which need the scene's array types, not its tree: against the scene compiled with
-    an empty one (`compile_for(..., tree=False)`), rendered at 2×2 and thrown away. The compile that follows
-    loads the BVH build's kernels, and the render finds its own compiled: the same image (BENCHMARKS.md,
-    2026-12-05, seventh and eighth sessions). `LUMOS_COMPILE_HELPER=0` compiles everything in this process."""
+    another core, `lumos warmup --plan METHOD --methods bvh`: first the device functions the method's compile plan gives
+    it (`methods.compile_plan`: the general kernels' plan, or `METHOD-lean` where the render compiles its kernels for a
+    plain scene, `compile.features`; when the method's kernel is not cached), which this compile loads as it reaches
+    them, then the BVH build's kernels (when they are not cached and the method traces rays: raster only with shadow
+    rays). Meanwhile this process compiles the plan's `first` subtrees, so that the two start apart, and then the
+    method's kernels, which need the scene's array types, not its tree: against the scene compiled with an empty one
+    (`compile_for(..., tree=False)`), rendered at 2×2 and thrown away. The compile that follows loads the BVH build's
+    kernels, and the render finds its own compiled: the same image (BENCHMARKS.md, 2026-12-05, seventh and eighth
+    sessions). `LUMOS_COMPILE_HELPER=0` compiles everything in this process."""
     import os
     import subprocess
 
@@ -122,12 +123,20 @@ def compile_with_helper(scene, cfg) -> None:
 
     if (os.cpu_count() or 1) < 2 or os.environ.get("LUMOS_COMPILE_HELPER") == "0":
         return
-    share = bool(plan.load(cfg.method)["roots"]) and not plan.top_cached(cfg.method)
     bvh = (cfg.method != "raster" or cfg.shadows) and not has_entries(build_nodes)
+    if not bvh and plan.top_cached(cfg.method):  # the general kernels are there: every render takes them
+        return
+    small = cfg.model_copy(update={"width": 2, "height": 2})
+    try:
+        compiled = compile_for(scene, small, tree=False)
+    except Exception:  # a scene the real compile refuses says why there
+        return
+    name = plan.plan_for(cfg.method, compiled.arrays)  # the general kernels' plan, or a plain scene's (-lean)
+    share = bool(plan.load(name)["roots"]) and not plan.top_cached(name)
     if not (share or bvh):
         return
     command = [sys.executable, "-m", "lumos", "warmup", "--jobs", "1", "--quiet"]
-    command += (["--plan", cfg.method] if share else []) + (["--methods", "bvh"] if bvh else [])
+    command += (["--plan", name] if share else []) + (["--methods", "bvh"] if bvh else [])
     try:
         helper = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                   stderr=subprocess.DEVNULL)
@@ -135,10 +144,9 @@ def compile_with_helper(scene, cfg) -> None:
         return
     try:
         if share:
-            plan.compile_share(cfg.method, "first")
-        small = cfg.model_copy(update={"width": 2, "height": 2})
-        entry_point(cfg.method)(compile_for(scene, small, tree=False), scene.camera, small)
-    except Exception:  # a scene the real compile refuses says why there; a kernel not compiled here compiles there
+            plan.compile_share(name, "first")
+        entry_point(cfg.method)(compiled, scene.camera, small)
+    except Exception:  # a kernel not compiled here compiles there
         pass
     finally:
         try:

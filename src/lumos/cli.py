@@ -228,7 +228,8 @@ def build_parser() -> argparse.ArgumentParser:
     warm.add_argument("--quiet", action="store_true", help="print nothing")
     warm.add_argument("--plan", metavar="METHOD", help="compile the device functions METHOD's compile plan gives "
                       "a helper (what a cold first render runs beside its own compile: "
-                      "lumos.methods.compile_plan), then only the families --methods names")
+                      "lumos.methods.compile_plan; METHOD-lean: the plan of its kernels for plain scenes), "
+                      "then only the families --methods names")
     warm.set_defaults(run=run_warmup)
 
     info = commands.add_parser("info", help="print what a scene holds")
@@ -661,8 +662,9 @@ def run_warmup(args: argparse.Namespace, started: float) -> int:
         from .api import METHODS
         from .methods import compile_plan as plan
 
-        if args.plan not in METHODS:
-            raise LumosError(f"--plan: unknown method {args.plan!r} (choose from {', '.join(METHODS)})")
+        if args.plan.removesuffix(plan.LEAN) not in METHODS:
+            raise LumosError(f"--plan: unknown method {args.plan!r} (choose from {', '.join(METHODS)}, each "
+                             f"optionally with {plan.LEAN}: its kernels for plain scenes)")
         plan.compile_share(args.plan)
         if not args.methods:
             return 0

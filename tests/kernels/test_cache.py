@@ -252,19 +252,25 @@ def test_the_compile_estimate_is_what_the_last_warmup_measured(tmp_path, monkeyp
     assert estimate_s("path") == pytest.approx(25.0) and estimate_s("raster") == pytest.approx(35.0)
 
 
-def test_a_warmup_family_renders_without_a_helper_process(monkeypatch):
+def test_a_warmup_family_renders_general_kernels_without_a_helper_process(monkeypatch):
     """The warm-up runs a process per core already: its families' first renders start no helper beside them
-    (`LUMOS_COMPILE_HELPER=0` while a family warms, the caller's setting back afterwards)."""
+    (`LUMOS_COMPILE_HELPER=0`), and compile the general kernels, not those of its plain scenes
+    (`LUMOS_LEAN_KERNELS=0`, `methods.common.kernel_arrays`), while a family warms; the caller's settings are back
+    afterwards."""
     from lumos.tools import warmup
 
+    names = ("LUMOS_COMPILE_HELPER", "LUMOS_LEAN_KERNELS")
     seen = []
-    monkeypatch.setitem(warmup._WORK, "bvh", lambda: seen.append(os.environ.get("LUMOS_COMPILE_HELPER")))
+    monkeypatch.setitem(warmup._WORK, "bvh", lambda: seen.append(tuple(os.environ.get(n) for n in names)))
     monkeypatch.setenv("LUMOS_COMPILE_HELPER", "1")
+    monkeypatch.delenv("LUMOS_LEAN_KERNELS", raising=False)
     assert warmup.warm_family("bvh").error == ""
-    assert seen == ["0"] and os.environ["LUMOS_COMPILE_HELPER"] == "1"
+    assert seen == [("0", "0")] and os.environ["LUMOS_COMPILE_HELPER"] == "1" and "LUMOS_LEAN_KERNELS" not in os.environ
     monkeypatch.delenv("LUMOS_COMPILE_HELPER")
+    monkeypatch.setenv("LUMOS_LEAN_KERNELS", "1")
     warmup.warm_family("bvh")
-    assert seen == ["0", "0"] and "LUMOS_COMPILE_HELPER" not in os.environ
+    assert seen == [("0", "0")] * 2 and "LUMOS_COMPILE_HELPER" not in os.environ
+    assert os.environ["LUMOS_LEAN_KERNELS"] == "1"
 
 
 def test_warmup_refuses_an_unknown_family(capsys):

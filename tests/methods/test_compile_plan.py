@@ -1,10 +1,8 @@
 """Compile plans (`lumos.methods.compile_plan`, recorded by `lumos.tools.plans`): what a helper process compiles
 beside a cold first render, and how the roots are chosen."""
 
-import base64
 import json
 import os
-import pickle
 import subprocess
 import sys
 import textwrap
@@ -111,14 +109,23 @@ def test_the_shipped_plans_are_current(path):
     first renders slower again), until the plans are recorded again with `python -m lumos.tools.plans`."""
     recorded = json.loads(path.read_text())
     assert plan.resolve(*recorded["top"]) is not None
-    assert recorded["roots"] and recorded["first"]
+    assert recorded["roots"]
     for root in recorded["roots"] + recorded["first"]:
         dispatcher = plan.resolve(root["module"], root["name"])
         assert isinstance(dispatcher, DeviceDispatcher), root["name"]
         assert closure_stamp(dispatcher.py_func) == root["stamp"], (
             f"{path.name}: {root['module']}.{root['name']} changed since its plan was recorded; run "
             "`python -m lumos.tools.plans` (from a checkout) to record the plans again")
-        assert isinstance(pickle.loads(base64.b64decode(root["args"])), tuple)
+        assert isinstance(plan.decode_args(root["args"]), tuple)
+
+
+def test_every_plan_is_recorded():
+    """A plan for each method a helper shares with, and one for the kernels of plain scenes (`-lean`) of each
+    method that compiles them (`compile.features`)."""
+    from lumos.tools.plans import PLANS
+
+    assert {"raycast", "raster", "whitted", "path", "path-lean", "whitted-lean", "raycast-lean"} == set(PLANS)
+    assert sorted(p.stem for p in plan.PLAN_DIR.glob("*.json")) == sorted(PLANS)
 
 
 def test_warmup_refuses_a_plan_for_an_unknown_method():

@@ -71,7 +71,9 @@ def bump_normal(tex, mat, u, v, p, n, dpdu, dpdv):
 @njit
 def bump_normal_filtered(tex, mat, u, v, p, n, dpdu, dpdv, dudx, dvdx, dudy, dvdy):
     """`bump_normal` filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy) (module doc: filtered bumps); a zero
-    footprint is the point lookup."""
+    footprint is the point lookup. n where `tex` is None (a scene without textures)."""
+    if tex is None:
+        return n
     row = np.int64(mat[MAT_BUMP])
     if row < 0:
         return n
@@ -168,6 +170,8 @@ def bump_frame(surf, tex, mat, ref, part, b1, b2, p, n, time):
     """(∂p/∂u, ∂p/∂v) for the material's bump map at a hit: `surface_tangents`, except that a normal map on a
     triangle with per-vertex tangents (FLAG_TANGENTS) takes T, the tangents interpolated by the barycentrics
     (b1, b2), and B = w·(n × T) with the handedness w of the first vertex."""
+    if tex is None:  # (a scene without textures)
+        return surface_tangents(surf, ref, part, p, n, time)
     row = np.int64(mat[MAT_BUMP])
     if (ref >= 0 and row >= 0 and tex.tex_info[row, TEX_BUMP_TYPE] == BUMP_NORMAL
             and (surf.tri_info[ref, INFO_FLAGS] & FLAG_TANGENTS) != 0):
@@ -186,7 +190,11 @@ def material_in_cone(surf, tex, mat, ref, part, b1, b2, p, n_geo, n_sh, u, v, d,
     """What a ray method needs of the material row `mat` at a hit: (ka, kd, ks, kr, ke, shininess) with its
     textures applied and the shading normal with its bump or normal map, both filtered over the footprint of a ray
     cone `width` wide there (`texture.cone_footprint`; width 0: point lookups), for a ray of unit direction d
-    meeting the surface (`ref`, `part`, barycentrics b1, b2) at p, geometric normal n_geo."""
+    meeting the surface (`ref`, `part`, barycentrics b1, b2) at p, geometric normal n_geo. `tex` None (a scene
+    without textures, `compile.features`): the row's own values and n_sh, nothing else compiled."""
+    if tex is None:
+        ka, kd, ks, kr, ke, shininess = material_coeffs_filtered(tex, mat, u, v, p, 0.0, 0.0, 0.0, 0.0)
+        return ka, kd, ks, kr, ke, shininess, n_sh
     fp = (0.0, 0.0, 0.0, 0.0)
     if mat[MAT_TEXTURE] >= 0.0 or mat[MAT_BUMP] >= 0.0:
         fp = cone_footprint(surf, ref, part, p, n_geo, d, width, time)

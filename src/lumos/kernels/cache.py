@@ -499,6 +499,16 @@ def has_entries(dispatcher) -> bool:
     return cache is None or any(f._load_index() for f in cache._index_files())
 
 
+def has_entry_for(dispatcher, first_arg) -> bool:
+    """Whether a cache folder holds an entry of `dispatcher` for its sources as they are whose first argument is of
+    type `first_arg` (whatever the others): whether it was compiled for those arrays before
+    (`methods.common.kernel_arrays`). True when Numba compiles nothing (NUMBA_DISABLE_JIT)."""
+    cache = getattr(dispatcher, "_cache", None)
+    if cache is None:
+        return True
+    return any(key[0] and key[0][0] == first_arg for f in cache._index_files() for key in f._load_index())
+
+
 def cached(dispatcher, prefix: str = "", library_class=None, cache_class=KernelCache):
     """Give a Numba dispatcher (compiled with `cache=False`) a `KernelCache` (or `cache_class`); `prefix` names
     its entries apart from another dispatcher's of the same function (Numba's index keys leave the compile

@@ -39,7 +39,7 @@ def closest_visible_hit(geo, surf, lit, o, d, t_min, t_max, stack, stack_t, time
     holes = 0
     while True:
         hit = closest_hit(geo, o, d, t_lo, t_max, stack, stack_t, time)
-        if hit[0] < 0.0 or lit.tex_info.shape[0] == 0 or holes >= config.MAX_HOLES:
+        if hit[0] < 0.0 or _no_textures(lit.tex_info) or holes >= config.MAX_HOLES:
             return hit
         if not _may_cut(surf, lit, hit[1]):
             return hit
@@ -64,9 +64,25 @@ def _may_cut(surf, lit, ref):
 
 @njit_inline
 def has_cutouts(lit):
-    """Whether any texture of the scene applies to opacity (a scan of tex_info's rows, a handful)."""
-    for row in range(lit.tex_info.shape[0]):
-        if np.int64(lit.tex_info[row, TEX_APPLY]) & APPLY_OPACITY:
+    """Whether any texture of the scene applies to opacity (a scan of tex_info's rows, a handful; False, and
+    nothing scanned, for the arrays of a scene without textures: `compile.features`)."""
+    return _any_opacity(lit.tex_info)
+
+
+@njit_inline
+def _no_textures(info):
+    """Whether the scene has no texture rows (None: arrays compiled without textures, `compile.features`)."""
+    if info is None:
+        return True
+    return info.shape[0] == 0
+
+
+@njit_inline
+def _any_opacity(info):
+    if info is None:
+        return False
+    for row in range(info.shape[0]):
+        if np.int64(info[row, TEX_APPLY]) & APPLY_OPACITY:
             return True
     return False
 

@@ -71,20 +71,21 @@ def principled_at(tex, mat, row, u, v, p, cos_o):
     b0, b1, b2 = mat[MAT_BASE], mat[MAT_BASE + 1], mat[MAT_BASE + 2]
     m = mat[MAT_METALLIC]
     r = mat[MAT_ROUGHNESS]
-    first = np.int64(mat[MAT_TEXTURE])
-    if first >= 0:
-        for k in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
-            mask = np.int64(tex.tex_info[k, TEX_APPLY])
-            if mask & APPLY_BASE:
-                c = texture_rgb(tex, k, u, v, p)
-                if tex.tex_info[k, TEX_MODE] == MODE_MULTIPLY:
-                    b0, b1, b2 = b0 * c[0], b1 * c[1], b2 * c[2]
-                else:
-                    b0, b1, b2 = c
-            elif mask & APPLY_METAL_ROUGH:
-                c = texture_rgb(tex, k, u, v, p)
-                m *= c[2]
-                r *= c[1]
+    if tex is not None:  # (None: a scene without textures, `compile.features`; Numba prunes the lookups)
+        first = np.int64(mat[MAT_TEXTURE])
+        if first >= 0:
+            for k in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
+                mask = np.int64(tex.tex_info[k, TEX_APPLY])
+                if mask & APPLY_BASE:
+                    c = texture_rgb(tex, k, u, v, p)
+                    if tex.tex_info[k, TEX_MODE] == MODE_MULTIPLY:
+                        b0, b1, b2 = b0 * c[0], b1 * c[1], b2 * c[2]
+                    else:
+                        b0, b1, b2 = c
+                elif mask & APPLY_METAL_ROUGH:
+                    c = texture_rgb(tex, k, u, v, p)
+                    m *= c[2]
+                    r *= c[1]
     m = min(max(m, 0.0), 1.0)
     alpha = max(r * r, ALPHA_MIN)
     for i in range(mat.shape[0]):  # (an explicit loop: slice assignment needs Numba's runtime, which is off)

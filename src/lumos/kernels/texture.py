@@ -113,11 +113,11 @@ from .layout import (
     MAT_TEXTURE,
     MAT_TEXTURE_COUNT,
     MODEL_PRINCIPLED,
-    Textures,
 )
 from .principled_classic import principled_classic
 from .tangents import surface_tangents
 from .vec import cross, dot, length, orthonormal_basis
+from .views import opacity_view
 
 # tex_info columns
 TEX_KIND = 0
@@ -390,6 +390,14 @@ def noise01(s, t, period_s, period_t):
 
 
 @njit_inline
+def _row_coeffs(mat):
+    """(ka, kd, ks, kr, emission, shininess) of the material row itself, no texture applied."""
+    return ((mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2]), (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2]),
+            (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2]), (mat[MAT_KR], mat[MAT_KR + 1], mat[MAT_KR + 2]),
+            (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2]), mat[MAT_SHININESS])
+
+
+@njit_inline
 def material_coeffs(tex, mat, u, v, p):
     """(ka, kd, ks, kr, emission, shininess), the first five RGB tuples: the material row's coefficients with its
     textures applied at (u, v) in list order, each replacing or multiplying the coefficients of its apply_to mask,
@@ -410,7 +418,10 @@ def _apply(mode, old, color):
 def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
     """`material_coeffs` with the textures filtered over the footprint (du/dx, dv/dx, du/dy, dv/dy); a zero
     footprint is the point lookup. A textured principled material's coefficients and exponent follow its base
-    colour, metallic and roughness at the point (`principled_coeffs_filtered`)."""
+    colour, metallic and roughness at the point (`principled_coeffs_filtered`). `tex` None (a scene without
+    textures, `compile.features`): the row's own values, and no texture lookup is compiled."""
+    if tex is None:
+        return _row_coeffs(mat)
     if mat[MAT_MODEL] == MODEL_PRINCIPLED and mat[MAT_TEXTURE] >= 0.0:
         return principled_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy)
     return _classic_coeffs(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy)
@@ -419,14 +430,12 @@ def material_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
 @njit_inline
 def _classic_coeffs(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
     """The row's coefficients with its textures applied in list order, filtered over the footprint."""
-    ka = (mat[MAT_KA], mat[MAT_KA + 1], mat[MAT_KA + 2])
-    kd = (mat[MAT_KD], mat[MAT_KD + 1], mat[MAT_KD + 2])
-    ks = (mat[MAT_KS], mat[MAT_KS + 1], mat[MAT_KS + 2])
-    kr = (mat[MAT_KR], mat[MAT_KR + 1], mat[MAT_KR + 2])
-    ke = (mat[MAT_EMISSION], mat[MAT_EMISSION + 1], mat[MAT_EMISSION + 2])
+    if tex is None:  # (a scene without textures)
+        return _row_coeffs(mat)
+    ka, kd, ks, kr, ke, shininess = _row_coeffs(mat)
     first = np.int64(mat[MAT_TEXTURE])
     if first < 0:
-        return ka, kd, ks, kr, ke, mat[MAT_SHININESS]
+        return ka, kd, ks, kr, ke, shininess
     for row in range(first, first + np.int64(mat[MAT_TEXTURE_COUNT])):
         mask = np.int64(tex.tex_info[row, TEX_APPLY])
         if (mask & APPLY_COEFFS) == 0:
@@ -443,7 +452,7 @@ def _classic_coeffs(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
             kr = _apply(mode, kr, color)
         if mask & APPLY_EMISSION:
             ke = _apply(mode, ke, color)
-    return ka, kd, ks, kr, ke, mat[MAT_SHININESS]
+    return ka, kd, ks, kr, ke, shininess
 
 
 @njit
@@ -479,7 +488,10 @@ def principled_coeffs_filtered(tex, mat, u, v, p, dudx, dvdx, dudy, dvdy):
 
 @njit_inline
 def has_cutout(tex, mat):
-    """Whether the material has an opacity texture (its surface may have holes)."""
+    """Whether the material has an opacity texture (its surface may have holes); False where `tex` is None (a
+    scene without textures)."""
+    if tex is None:
+        return False
     first = np.int64(mat[MAT_TEXTURE])
     if first < 0:
         return False
@@ -493,6 +505,8 @@ def has_cutout(tex, mat):
 def material_alpha(tex, mat, u, v, p):
     """The coverage α at (u, v): 1, then each opacity texture in list order replacing or multiplying it by its
     channel 0 (an image's alpha or luminance, a pattern's luminance). α < ALPHA_CUTOFF is a hole."""
+    if tex is None:  # (a scene without textures)
+        return 1.0
     alpha = 1.0
     first = np.int64(mat[MAT_TEXTURE])
     if first < 0:
@@ -508,8 +522,8 @@ def material_alpha(tex, mat, u, v, p):
 def lighting_textures(lit):
     """The textures of a `layout.Lighting` view as the `Textures` view the readers here take, without tangents
     (shape (0, 12)): the shadow rays' and the cut-out walk's holes read the same compiled `is_hole` as
-    shading does, not a second one typed for the other view."""
-    return Textures(lit.tex_info, lit.tex_pixels, lit.tex_pixels[:0])
+    shading does, not a second one typed for the other view. None for a scene without textures."""
+    return opacity_view(lit.tex_info, lit.tex_pixels)
 
 
 @njit_inline

@@ -51,9 +51,18 @@ def _shape_hit(geo, s, o, d, t_min, t_max, time):
     if m[3, 3] != 0.0:  # a moving shape: at `time` it is displaced by time·motion, so the ray moves back
         o = (o[0] - time * m[3, 0], o[1] - time * m[3, 1], o[2] - time * m[3, 2])
     if info[INFO_KIND] == SHAPE_CSG:  # its solids share its motion: they see the same moved origin
-        return intersect_csg(geo, s, o, d, t_min, t_max)
+        return _csg_hit(geo.csg_nodes, geo, s, o, d, t_min, t_max)
     t, part = intersect_shape(info[INFO_KIND], info[INFO_FLAGS] & FLAG_CAPPED, m, o, d, t_min, t_max)
     return t, part, 0.0, 0.0
+
+
+@njit_inline
+def _csg_hit(nodes, geo, s, o, d, t_min, t_max):
+    """`csg.intersect_csg`, compiled only where the scene has csg objects: `nodes` (geo's csg_nodes) is None in
+    the arrays of a scene without any (`compile.features.lean_arrays`), and Numba then prunes the call."""
+    if nodes is None:
+        return NO_HIT, 0, 0.0, 0.0
+    return intersect_csg(geo, s, o, d, t_min, t_max)
 
 
 @njit_inline

@@ -42,6 +42,34 @@ def term_aovs(terms: np.ndarray) -> dict:
     return {name: np.ascontiguousarray(terms[:, :, 3 * k:3 * k + 3], np.float32) for k, name in enumerate(TERM_AOVS)}
 
 
+#: the methods whose top-level kernels take `kernel_arrays`: lean arrays for a plain scene (`compile.features`)
+LEAN_METHODS = ("raycast", "whitted", "path")
+
+
+def kernel_arrays(kernel, sa):
+    """The scene arrays to call top-level `kernel` with: `sa` itself (the general arrays) where this process has
+    compiled `kernel` for them or the kernel cache holds it so compiled (after `pip install .` or `lumos warmup`,
+    always), else `compile.features.lean_arrays(sa)`, for which it compiles without the features the scene does not
+    use: less to compile on a cold first render, the same image. LUMOS_LEAN_KERNELS=0 always takes the general
+    arrays (`lumos warmup` does: it compiles what every scene can use), =1 the lean ones of a plain scene. (Under
+    NUMBA_DISABLE_JIT the kernel is a Python function, which compiles nothing: the general arrays.)"""
+    import os
+
+    from ..compile.features import lean_arrays
+    from ..kernels.cache import has_entry_for
+
+    choice = os.environ.get("LUMOS_LEAN_KERNELS")
+    if choice == "0" or not hasattr(kernel, "overloads"):
+        return sa
+    lean = lean_arrays(sa)
+    if lean is sa or choice == "1":
+        return lean
+    general = numba.typeof(sa)
+    if any(sig and sig[0] == general for sig in kernel.overloads) or has_entry_for(kernel, general):
+        return sa
+    return lean
+
+
 def set_threads(threads: int | None) -> int:
     """Use `threads` worker threads (at most the cores Numba was started with); returns the number used."""
     available = numba.config.NUMBA_NUM_THREADS

@@ -18,6 +18,10 @@ nothing but the help it no longer gives, and the kernels compiled are always tho
 
     compile_share("whitted")             # in the helper process (`lumos warmup --plan whitted`)
     compile_share("whitted", "first")    # in the render's, before its kernel (`api.compile_with_helper`)
+
+A method whose kernels compile to plain scenes (`compile.features`, `methods.common.LEAN_METHODS`) has a second
+plan, `<method>-lean`, for its kernels compiled for a plain scene's lean arrays: `plan_for` names the one a render
+compiles.
 """
 
 from __future__ import annotations
@@ -32,10 +36,27 @@ from pathlib import Path
 PLAN_DIR = Path(__file__).resolve().parent / "plans"
 
 
+#: the suffix of a plan for the kernels compiled for a plain scene's lean arrays
+LEAN = "-lean"
+
+
+def plan_for(method: str, sa) -> str:
+    """The name of the plan a first render of `method` on scene arrays `sa` (a `layout.SceneArrays`) compiles:
+    `method`, or `method` + LEAN where its kernels take `sa`'s lean arrays (`methods.common.kernel_arrays`)."""
+    from .common import LEAN_METHODS, kernel_arrays
+
+    top = load(method).get("top")
+    kernel = resolve(*top) if top else None
+    if method in LEAN_METHODS and kernel is not None and kernel_arrays(kernel, sa) is not sa:
+        return method + LEAN
+    return method
+
+
 @lru_cache(maxsize=None)
 def load(method: str) -> dict:
-    """The plan of `method` (its JSON object: `top` the top-level kernel as [module, name], `roots` in the order
-    the helper compiles them, `first` what the render compiles first), or an empty one where there is none."""
+    """The plan `method` (a method's name, or with LEAN after it), its JSON object: `top` the top-level kernel as
+    [module, name] and `top_arg` its first argument's type, `roots` in the order the helper compiles them, `first`
+    what the render compiles first; or an empty one where there is none."""
     path = PLAN_DIR / f"{method}.json"
     try:
         return json.loads(path.read_text())
@@ -55,13 +76,20 @@ def resolve(module: str, name: str):
 
 
 def top_cached(method: str) -> bool:
-    """Whether `method`'s top-level kernel has cache entries for its sources as they are (then there is nothing
-    to share: its render loads it). True where the method has no plan."""
-    from ..kernels.cache import has_entries
+    """Whether the top-level kernel of plan `method` has cache entries for its sources as they are, for the scene
+    arrays the plan was recorded with (its `top_arg`: the general arrays, or with LEAN a plain scene's lean ones);
+    then there is nothing to share: its render loads it. True where there is no such plan."""
+    from ..kernels.cache import has_entries, has_entry_for
 
-    top = load(method).get("top")
-    kernel = resolve(*top) if top else None
-    return kernel is None or has_entries(kernel)
+    plan = load(method)
+    kernel = resolve(*plan["top"]) if plan.get("top") else None
+    if kernel is None:
+        return True
+    try:
+        arrays = decode_args(plan["top_arg"])[0]
+    except Exception:  # (a plan recorded without it, or a type that no longer unpickles)
+        return has_entries(kernel)
+    return has_entry_for(kernel, arrays)
 
 
 def compile_share(method: str, side: str = "roots") -> int:
@@ -77,7 +105,7 @@ def compile_share(method: str, side: str = "roots") -> int:
         if dispatcher is None or closure_stamp(dispatcher.py_func) != root["stamp"]:
             continue
         try:
-            dispatcher.compile(pickle.loads(base64.b64decode(root["args"])))
+            dispatcher.compile(decode_args(root["args"]))
         except Exception:  # (best effort: see the docstring)
             continue
         done += 1
@@ -87,3 +115,8 @@ def compile_share(method: str, side: str = "roots") -> int:
 def encode_args(args: tuple) -> str:
     """A root's argument types as the plan stores them."""
     return base64.b64encode(pickle.dumps(tuple(args), protocol=4)).decode("ascii")
+
+
+def decode_args(text: str) -> tuple:
+    """The argument types `encode_args` stored."""
+    return pickle.loads(base64.b64decode(text))

@@ -22,7 +22,7 @@ import numpy as np
 from ..compile.camera import camera_arrays
 from ..kernels.threads import parallel_for
 from .capabilities import check_settings
-from .common import Film, check_memory, row_bands, set_threads
+from .common import Film, check_memory, kernel_arrays, row_bands, set_threads
 from .path_trace import (
     FILTER_BOX,
     FILTER_CENTRE,
@@ -118,8 +118,9 @@ class PathSums:
     def trace(self, job: PathJob, y0: int, y1: int, s0: int, s1: int, threads: int | None = None) -> None:
         """Add samples [s0, s1) of rows y0 … y1−1 (whole-image buffers only), the rows spread over the threads."""
         s0, s1 = np.int64(s0), np.int64(s1)
+        sa = kernel_arrays(pass_rows, job.sa)  # (compile.features)
         parallel_for(lambda r0, r1: pass_rows(
-            job.sa, job.em, job.cam_vecs, job.cam_params, job.cam_time, job.width, job.height, np.int64(r0),
+            sa, job.em, job.cam_vecs, job.cam_params, job.cam_time, job.width, job.height, np.int64(r0),
             np.int64(r1), s0, s1, job.spp, job.seed, job.max_depth, job.mode, job.sampler, job.filter_kind,
             job.keep, self.sums, self.sums2, self.guides, self.depth, self.object_id, self.rays_per_row,
             self.bad_per_row), y0, y1, threads=threads)

@@ -24,7 +24,7 @@ from ..kernels.surface import shading_side, surface_at
 from ..kernels.bump import material_in_cone
 from ..kernels.views import geometry_of, lighting_of, sky_of, surfaces_of, textures_of
 from ..kernels.vec import dot, mul
-from .common import Film, finish, row_bands, run_bands, start
+from .common import Film, finish, kernel_arrays, row_bands, run_bands, start
 
 
 @njit
@@ -144,7 +144,8 @@ def render_raycast(compiled, camera, settings, progress=None, explain=None, rows
     pixel, light_log, bands = _NO_PIXEL, np.zeros((0, PER_LIGHT_SIZE)), row_bands(height, rows=rows)
     if explain is not None:
         pixel, light_log, bands = np.array(explain[:2], np.int64), explain[2], [(explain[1], explain[1] + 1)]
-    run_bands(lambda r0, r1: _raycast_rows(compiled.arrays, cam_vecs, cam_params, width, height, r0, r1, spp,
+    sa = kernel_arrays(_raycast_rows, compiled.arrays)  # (compile.features)
+    run_bands(lambda r0, r1: _raycast_rows(sa, cam_vecs, cam_params, width, height, r0, r1, spp,
                                            settings.seed, bool(settings.mipmap), b.radiance, b.depth, b.normal,
                                            b.albedo, b.object_id, b.terms, b.want_terms, b.rays_per_row, pixel,
                                            light_log),

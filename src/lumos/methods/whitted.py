@@ -35,7 +35,7 @@ from ..kernels.camera import camera_cone
 from ..kernels.jit import njit_alloc
 from ..errors import LumosError
 from ..kernels.views import owned_views
-from .common import SURFACE_AOVS, TERM_CHANNELS, Film, finish, row_bands, run_bands, start
+from .common import SURFACE_AOVS, TERM_CHANNELS, Film, finish, kernel_arrays, row_bands, run_bands, start
 from .whitted_pixels import AOVS, CORNERS, SAMPLES, SQUARES, pixel, pixel_rows
 from .whitted_trace import LOG_DEPTH, LOG_FX, LOG_FY, trace_scratch
 
@@ -111,7 +111,7 @@ def render_whitted(compiled, camera, settings, progress=None, rows=None) -> Film
     threads, b = start(settings, bytes_per_pixel=80)
     cam_vecs, cam_params = camera_arrays(camera, settings.filter)
     cam_time = np.array(camera.shutter, dtype=np.float64)
-    sa = compiled.arrays
+    sa = kernel_arrays(pixel_rows, compiled.arrays)  # (compile.features)
     seed = np.int64(settings.seed)
     if settings.resolved_max_depth() is None:
         raise LumosError("render.max_depth: whitted needs a finite number of bounces (-1, unbounded, is for path)")

@@ -2,15 +2,16 @@
 
     python -m lumos.tools.plans                     # raycast, raster, whitted, path, from a checkout (it renders
                                                     # its examples)
-    python -m lumos.tools.plans --methods path
+    python -m lumos.tools.plans --methods path,path-lean
 
 For each method, a child process renders the method's example at 160×120, 1 spp, on an empty kernel cache, with
 no helper, and listens to Numba's compile events: every function compiled under the method's top-level kernel,
 in order, with its own (exclusive) compile time, and which device function calls which. `choose` then picks the
 subtrees a helper process compiles meanwhile and those the render compiles first (simulating both processes on
-those times), and the plan is written to `src/lumos/methods/plans/<method>.json`. Run it again after changing
-kernels: roots whose sources changed are skipped by the helper until then (the renders stay right, only slower to
-compile).
+those times), and the plan is written to `src/lumos/methods/plans/<method>.json`. `<method>-lean` is recorded on
+the same scene, a plain one, with the kernels compiled for its lean arrays (`compile.features`); `<method>` with
+the general kernels (LUMOS_LEAN_KERNELS=0). Run it again after changing kernels: roots whose sources changed are
+skipped by the helper until then (the renders stay right, only slower to compile).
 """
 
 from __future__ import annotations
@@ -25,12 +26,15 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..methods.compile_plan import PLAN_DIR, encode_args, resolve
+from ..methods.common import LEAN_METHODS
+from ..methods.compile_plan import LEAN, PLAN_DIR, encode_args, resolve
 
 #: what each planned method's first render is recorded on (bench_first_image's scenes): the methods whose first
 #: render compiles beside a helper (`api.WITH_HELPER`)
 SCENES = {"raycast": "showcase.yaml", "raster": "showcase.yaml", "whitted": "showcase.yaml",
           "path": "path/cornell.yaml"}
+#: the plans recorded: each method's, and a plain scene's for the methods whose kernels compile to it
+PLANS = tuple(SCENES) + tuple(m + LEAN for m in SCENES if m in LEAN_METHODS)
 #: the modules of the BVH build's kernels, which the helper compiles after its share (`lumos warmup --methods bvh`)
 BVH_MODULES = ("lumos.kernels.bvh_build",)
 #: the helper's first compile starts this much later than the render's (the render starts it after its imports
@@ -40,10 +44,11 @@ HELPER_START_S = 1.3
 LOAD_S = 0.01
 
 
-def record(method: str, examples: Path) -> dict:
-    """What a cold first render of `method` compiles, in this process: {order: [[module, name], ...] in the order
+def record(name: str, examples: Path) -> dict:
+    """What a cold first render for plan `name` compiles, in this process: {order: [[module, name], ...] in the order
     their compiles finished, excl: seconds each, calls: [[caller, callee], ...] (indices into order), args:
-    {index: encoded argument types} for the device functions, top: the top-level kernel that took longest, bvh_s:
+    {index: encoded argument types} for the device functions, top: the top-level kernel that took longest,
+    top_arg: the type of its first argument (the scene arrays, general or lean) as a 1-tuple, bvh_s:
     the compile time of the BVH build's kernels (which the helper compiles after its share), left out of the
     rest}."""
     from numba.core import event
@@ -103,12 +108,14 @@ def record(method: str, examples: Path) -> dict:
 
     DeviceDispatcher.get_call_template = get_call_template
     event.register("numba:compile", Compiles())
+    method = name.removesuffix(LEAN)
     render(load_scene(examples / SCENES[method]), method=method, width=160, height=120, spp=1)
     index = {key: i for i, key in enumerate(order)}
+    top = max(tops, key=tops.get)
     return {"order": [list(k) for k in order], "excl": [excl[k] for k in order],
             "calls": sorted([index[a], index[b]] for a, b in calls if a in index and b in index),
-            "args": {str(index[k]): v for k, v in args.items()}, "top": list(max(tops, key=tops.get)),
-            "bvh_s": outside[0]}
+            "args": {str(index[k]): v for k, v in args.items()}, "top": list(top),
+            "top_arg": encode_args(next(iter(resolve(*top).overloads))[:1]), "bvh_s": outside[0]}
 
 
 def _closures(n: int, calls: list) -> list[list[int]]:
@@ -219,7 +226,7 @@ def plan_of(method: str, rec: dict) -> dict:
                         "args": rec["args"][str(r)]})
         return out
 
-    return {"method": method, "top": rec["top"],
+    return {"method": method, "top": rec["top"], "top_arg": rec["top_arg"],
             "recorded": {"date": time.strftime("%Y-%m-%d"), "machine": platform.processor() or platform.machine(),
                          "compile_alone_s": round(alone, 2), "bvh_s": round(rec["bvh_s"], 2),
                          "predicted_s": round(finish, 2), "functions": len(rec["order"])},
@@ -228,7 +235,7 @@ def plan_of(method: str, rec: dict) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--methods", default=",".join(SCENES), help="methods to record (default: %(default)s)")
+    ap.add_argument("--methods", default=",".join(PLANS), help="plans to record (default: %(default)s)")
     ap.add_argument("--examples", type=Path, default=Path(__file__).resolve().parents[3] / "examples",
                     help="the checkout's examples folder (default: %(default)s)")
     ap.add_argument("--child", metavar="METHOD", help=argparse.SUPPRESS)
@@ -239,7 +246,7 @@ def main(argv: list[str] | None = None) -> int:
     for method in args.methods.split(","):
         with tempfile.TemporaryDirectory(prefix="lumos-plan-") as cache:
             env = {**os.environ, "LUMOS_CACHE_DIR": cache, "NUMBA_CACHE_DIR": cache,
-                   "LUMOS_COMPILE_HELPER": "0"}
+                   "LUMOS_COMPILE_HELPER": "0", "LUMOS_LEAN_KERNELS": "1" if method.endswith(LEAN) else "0"}
             out = subprocess.run([sys.executable, "-m", "lumos.tools.plans", "--child", method, "--examples",
                                   str(args.examples)], env=env, capture_output=True, text=True, check=True)
         plan = plan_of(method, json.loads(out.stdout.strip().splitlines()[-1]))

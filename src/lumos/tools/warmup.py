@@ -18,6 +18,7 @@ import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Callable, Iterable, Optional
 
@@ -196,22 +197,34 @@ def warm_family(family: str) -> FamilyResult:
     from ..jitwatch import watch_compiles
 
     t0 = time.perf_counter()
-    # no helper process beside each family's first render (`api.compile_with_helper`): the warm-up already runs a
-    # process per core, and helpers on top of them made it slower (alternating, fresh cache: 53.7, 55.2 s with
-    # them, 50.2, 53.3 s without)
-    helper = os.environ.get("LUMOS_COMPILE_HELPER")
-    os.environ["LUMOS_COMPILE_HELPER"] = "0"
     try:
-        with watch_compiles() as watch:
+        with _warming(), watch_compiles() as watch:
             _WORK[family]()
     except Exception as exc:  # reported, not raised: the other families still warm
         return FamilyResult(family, 0, 0.0, time.perf_counter() - t0, f"{type(exc).__name__}: {exc}")
-    finally:
-        if helper is None:
-            os.environ.pop("LUMOS_COMPILE_HELPER", None)
-        else:
-            os.environ["LUMOS_COMPILE_HELPER"] = helper
     return FamilyResult(family, watch.compiles, watch.seconds, time.perf_counter() - t0)
+
+
+#: the settings a family warms under: no helper process beside each family's first render
+#: (`api.compile_with_helper`: the warm-up already runs a process per core, and helpers on top of them made it
+#: slower: alternating, fresh cache, 53.7, 55.2 s with them, 50.2, 53.3 s without), and the general kernels,
+#: whatever the warm-up's scenes hold (`methods.common.kernel_arrays`): those every scene can use
+WARMING = {"LUMOS_COMPILE_HELPER": "0", "LUMOS_LEAN_KERNELS": "0"}
+
+
+@contextmanager
+def _warming():
+    """WARMING's settings in the environment, the caller's back afterwards."""
+    saved = {name: os.environ.get(name) for name in WARMING}
+    os.environ.update(WARMING)
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 def _child(family: str, cache_dir: Optional[str]) -> FamilyResult:
