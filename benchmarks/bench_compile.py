@@ -25,7 +25,9 @@ With `--one-process` every family compiles in one child process, one after the o
 (traversal, shading, the BVH build) compiles once, for the first family that reaches it. That is the whole compile
 of lumos; the default (a fresh process per family) is what one method's first render costs.
 
-The workloads are small renders through the public API (160×120, 1 spp) that reach every method's kernels.
+The workloads are small renders through the public API (160×120, 1 spp) that reach every method's kernels: the
+general kernels, as `lumos warmup` compiles them (LUMOS_LEAN_KERNELS=0 unless set: the showcase and the Cornell
+boxes are plain scenes, whose first render elsewhere compiles the kernels for plain scenes, `compile.features`).
 """
 
 from __future__ import annotations
@@ -173,7 +175,8 @@ def child(family: str) -> None:
 
 def run_family(family: str, src: Path) -> dict:
     with tempfile.TemporaryDirectory(prefix="lumos-bench-compile-") as tmp:
-        env = dict(os.environ, NUMBA_CACHE_DIR=tmp, LUMOS_CACHE_DIR=tmp, PYTHONPATH=str(src))
+        env = dict(os.environ, NUMBA_CACHE_DIR=tmp, LUMOS_CACHE_DIR=tmp, PYTHONPATH=str(src),
+                   LUMOS_LEAN_KERNELS=os.environ.get("LUMOS_LEAN_KERNELS", "0"))
         proc = subprocess.run([sys.executable, __file__, "--child", family], env=env, capture_output=True,
                               text=True)
     if proc.returncode != 0:
