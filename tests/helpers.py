@@ -5,6 +5,10 @@ tests/ is on sys.path (`pythonpath` in pyproject.toml), so a test file in any su
 DATA`; fixtures live in conftest.py, the slow reference twins in naive.py and chi2.py beside this file.
 """
 
+import json
+import os
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -136,3 +140,14 @@ def write_sharing_package(root: Path, g_body: str = "return x * 2.0 + 1.0", seco
             for i in range(x.size):
                 out[i] = {second}
     """))
+
+
+def run_script(script: str, *args: str, cache: Path, **extra_env) -> dict:
+    """Run Python `script` with `args` in a fresh process whose kernel cache is `cache` (alone: no NUMBA_CACHE_DIR)
+    and `extra_env` added; returns the JSON object its last line prints (test_cache.py, test_compile_plan.py)."""
+    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache), **extra_env)
+    env.pop("NUMBA_CACHE_DIR", None)
+    proc = subprocess.run([sys.executable, "-c", script, *map(str, args)], env=env, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout.strip().splitlines()[-1])

@@ -15,7 +15,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from helpers import COUNT_COMPILES, write_sharing_package
+from helpers import COUNT_COMPILES, run_script, write_sharing_package
 
 import lumos
 from lumos.jitwatch import ESTIMATE_S, estimate_s, save_timings
@@ -73,12 +73,7 @@ def write_package(root: Path, g_body: str = "return x * 2", unrelated: str = "K 
 
 
 def run_child(root: Path, cache_dir: Path, kinds: str = "int") -> dict:
-    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache_dir))
-    env.pop("NUMBA_CACHE_DIR", None)
-    proc = subprocess.run([sys.executable, "-c", CHILD, str(root), kinds], env=env, capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return run_script(CHILD, root, kinds, cache=cache_dir)
 
 
 def test_the_closure_of_a_kernel_holds_what_it_inlines_and_nothing_else():
@@ -155,12 +150,7 @@ SHARING_CHILD = COUNT_COMPILES + textwrap.dedent("""
 
 
 def run_sharing_child(root: Path, cache_dir: Path, kernel: str, **extra_env) -> dict:
-    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache_dir), **extra_env)
-    env.pop("NUMBA_CACHE_DIR", None)
-    proc = subprocess.run([sys.executable, "-c", SHARING_CHILD, str(root), kernel], env=env, capture_output=True,
-                          text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return run_script(SHARING_CHILD, root, kernel, cache=cache_dir, **extra_env)
 
 
 def test_a_kernel_in_another_process_loads_the_device_functions_it_shares(tmp_path):

@@ -2,14 +2,13 @@
 beside a cold first render, and how the roots are chosen."""
 
 import json
-import os
 import subprocess
 import sys
 import textwrap
 from pathlib import Path
 
 import pytest
-from helpers import COUNT_COMPILES, write_sharing_package
+from helpers import COUNT_COMPILES, run_script, write_sharing_package
 
 from lumos.kernels.cache import closure_stamp
 from lumos.kernels.jit import DeviceDispatcher
@@ -44,12 +43,7 @@ CHILD = COUNT_COMPILES + textwrap.dedent("""
 
 
 def _child(root: Path, cache: Path, mode: str) -> dict:
-    env = dict(os.environ, LUMOS_CACHE_DIR=str(cache))
-    env.pop("NUMBA_CACHE_DIR", None)
-    proc = subprocess.run([sys.executable, "-c", CHILD, str(root), mode], env=env, capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return run_script(CHILD, root, mode, cache=cache)
 
 
 def test_a_helper_compiles_the_plans_roots_and_the_render_loads_them(tmp_path):

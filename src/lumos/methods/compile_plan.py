@@ -45,8 +45,7 @@ def plan_for(method: str, sa) -> str:
     `method`, or `method` + LEAN where its kernels take `sa`'s lean arrays (`methods.common.kernel_arrays`)."""
     from .common import LEAN_METHODS, kernel_arrays
 
-    top = load(method).get("top")
-    kernel = resolve(*top) if top else None
+    kernel = top_kernel(method)
     if method in LEAN_METHODS and kernel is not None and kernel_arrays(kernel, sa) is not sa:
         return method + LEAN
     return method
@@ -62,6 +61,12 @@ def load(method: str) -> dict:
         return json.loads(path.read_text())
     except (OSError, ValueError):
         return {"top": None, "roots": [], "first": []}
+
+
+def top_kernel(method: str):
+    """The top-level kernel of plan `method` (its dispatcher), or None where there is no such plan."""
+    top = load(method).get("top")
+    return resolve(*top) if top else None
 
 
 def resolve(module: str, name: str):
@@ -81,12 +86,11 @@ def top_cached(method: str) -> bool:
     then there is nothing to share: its render loads it. True where there is no such plan."""
     from ..kernels.cache import has_entries, has_entry_for
 
-    plan = load(method)
-    kernel = resolve(*plan["top"]) if plan.get("top") else None
+    kernel = top_kernel(method)
     if kernel is None:
         return True
     try:
-        arrays = decode_args(plan["top_arg"])[0]
+        arrays = decode_args(load(method)["top_arg"])[0]
     except Exception:  # (a plan recorded without it, or a type that no longer unpickles)
         return has_entries(kernel)
     return has_entry_for(kernel, arrays)
