@@ -66,20 +66,21 @@ def test_the_lean_arrays_of_a_plain_scene_leave_its_features_out():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("method, scene", [("raycast", EXAMPLES / "showcase.yaml"),
-                                           ("whitted", EXAMPLES / "showcase.yaml"), ("path", PLAIN_PATH)],
-                         ids=["raycast", "whitted", "path"])
-def test_a_plain_scene_renders_the_same_to_the_bit_with_its_lean_kernels(method, scene, monkeypatch):
-    settings = {"method": method, "width": 40, "height": 30, "spp": 2}
-    if method == "whitted":
-        settings.update(antialias="adaptive", adaptive_depth=1)
-    monkeypatch.setenv("LUMOS_LEAN_KERNELS", "0")
-    general = lumos.render(scene, **settings)
-    monkeypatch.setenv("LUMOS_LEAN_KERNELS", "1")
-    lean = lumos.render(scene, **settings)
-    assert any(_lean(sig) for sig in TOPS[method].overloads)  # the lean variant was the one run
-    assert general.array.mean() > 0.01
-    np.testing.assert_array_equal(lean.array, general.array)
+def test_a_plain_scene_renders_the_same_to_the_bit_with_its_lean_kernels(monkeypatch):
+    """The three methods in one test, one after the other: their lean kernels share device functions (traversal,
+    the surface, the shading readers), which then compile once, in this process."""
+    for method, scene in (("raycast", EXAMPLES / "showcase.yaml"), ("whitted", EXAMPLES / "showcase.yaml"),
+                          ("path", PLAIN_PATH)):
+        settings = {"method": method, "width": 40, "height": 30, "spp": 2}
+        if method == "whitted":
+            settings.update(antialias="adaptive", adaptive_depth=1)
+        monkeypatch.setenv("LUMOS_LEAN_KERNELS", "0")
+        general = lumos.render(scene, **settings)
+        monkeypatch.setenv("LUMOS_LEAN_KERNELS", "1")
+        lean = lumos.render(scene, **settings)
+        assert any(_lean(sig) for sig in TOPS[method].overloads), method  # the lean variant was the one run
+        assert general.array.mean() > 0.01, method
+        np.testing.assert_array_equal(lean.array, general.array, err_msg=method)
 
 
 def test_a_render_keeps_the_general_kernels_it_has(monkeypatch):
